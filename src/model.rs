@@ -1,0 +1,734 @@
+//! The contact-resolved model: the tape as thin rigid links in rapier2d. This is the only
+//! module that imports the engine; it knows nothing of references, files or reports.
+//!
+//! What is modelled, and why only that:
+//! - The wound part is one rigid body (the coil) whose mass properties are the exact sum
+//!   of its links (chords of the spiral, mass on the midline). Locked joint chains cannot
+//!   hold a wound coil, so the wound links are not separate bodies.
+//! - The coil touches the floor through a ball that is refitted every step to the
+//!   osculating circle of the midline spiral at its current lowest point, so the contact is
+//!   truly curved and the coil rolls on the spiral itself. The floor's contact plane is the
+//!   laid tape's midline plane, `y = b/2`: the inextensible midline rolls without slip, and
+//!   the zero-velocity point is the midline peel point.
+//! - A link leaves the coil when the coil's lowest point passes the link's far node; it
+//!   becomes a body with a segment collider, joined by revolute joints to its neighbours.
+//! - A laid link whose nodes have stopped moving is frozen: removed from the engine, its
+//!   potential energy kept, its neighbour pinned to the world at the shared node. No body
+//!   exists for the wound links or the resting tape, so a step costs the same whatever the
+//!   number of links.
+//! - When the coil's equivalent radius reaches the bang radius, the remaining links are
+//!   released as a free chain and the final bang is resolved by contact.
+//!
+//! Every change of energy is measured where it happens, into an [`EnergyLedger`].
+
+use std::collections::VecDeque;
+use std::f64::consts::PI;
+
+use rapier2d_f64::prelude::*;
+use serde::Serialize;
+
+use crate::scene::Scene;
+use crate::spiral::{Spiral, SpiralMoments, rotate};
+
+/// Where the energy went, each part measured where it happens (J).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct EnergyLedger {
+    /// Lost inside engine steps while the coil rolls (contacts, joints, integration).
+    pub step_j: f64,
+    /// Lost (or gained, if negative) when a link leaves the coil.
+    pub detach_j: f64,
+    /// Kinetic energy discarded when laid links were frozen while the coil rolls.
+    pub freeze_j: f64,
+    /// Lost from the start of the final bang on (steps and freezes alike).
+    pub bang_j: f64,
+}
+
+impl EnergyLedger {
+    /// Sum of all losses (J).
+    pub fn total_j(&self) -> f64 {
+        self.step_j + self.detach_j + self.freeze_j + self.bang_j
+    }
+}
+
+/// The phase of a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Phase {
+    /// The coil rolls and sheds links.
+    Rolling,
+    /// The remaining links were released and the final bang is being resolved.
+    Bang,
+    /// Nothing more to simulate.
+    Done,
+}
+
+/// What the model reports after each step.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Observation {
+    /// Simulated time (s).
+    pub t_s: f64,
+    /// Phase after this step.
+    pub phase: Phase,
+    /// Laid mass fraction, measured along the continuous spiral up to the lowest point.
+    pub laid_fraction: f64,
+    /// Spiral parameter of the coil's lowest midline point (rad).
+    pub psi_low: f64,
+    /// Contact-line position: x of the coil's lowest midline point (m).
+    pub x_m: f64,
+    /// Clockwise spin of the coil (rad/s).
+    pub omega_rad_s: f64,
+    /// Kinetic energy of everything that moves (J).
+    pub kinetic_j: f64,
+    /// Potential energy of the whole tape above the floor, y = 0 (J).
+    pub potential_j: f64,
+    /// Upward force of the floor on the tape's moving part (N), from contact impulses.
+    pub normal_n: f64,
+    /// Horizontal force of the floor on the tape's moving part, +x positive (N).
+    pub friction_n: f64,
+    /// The energy ledger so far.
+    pub ledger: EnergyLedger,
+    /// Links that have left the coil.
+    pub detached: usize,
+    /// Bodies in the engine (coil and moving links).
+    pub active_bodies: usize,
+    /// Largest joint separation among the active joints (m).
+    pub max_joint_gap_m: f64,
+    /// Deepest penetration of a collider into the floor (m).
+    pub max_penetration_m: f64,
+    /// The last step's length (s).
+    pub dt_s: f64,
+}
+
+/// One link of the discretised tape: a chord of the spiral between two nodes.
+#[derive(Debug, Clone, Copy)]
+struct Link {
+    /// Node towards the laid end (body frame of the coil).
+    near: [f64; 2],
+    /// Node towards the centre.
+    far: [f64; 2],
+    mass_kg: f64,
+    length_m: f64,
+}
+
+impl Link {
+    fn centre(&self) -> [f64; 2] {
+        [
+            0.5 * (self.near[0] + self.far[0]),
+            0.5 * (self.near[1] + self.far[1]),
+        ]
+    }
+
+    /// Angle of the chord from far to near node, in the coil frame.
+    fn angle(&self) -> f64 {
+        (self.near[1] - self.far[1]).atan2(self.near[0] - self.far[0])
+    }
+}
+
+/// A link that left the coil and is simulated as its own body.
+#[derive(Debug, Clone, Copy)]
+struct FreeLink {
+    index: usize,
+    body: RigidBodyHandle,
+}
+
+/// Running sums of the coil's mass moments in its body frame.
+#[derive(Debug, Clone, Copy, Default)]
+struct CoilSums {
+    mass: f64,
+    first: [f64; 2],
+    /// Second moment about the body origin, own inertia of each link included.
+    second: f64,
+}
+
+impl CoilSums {
+    fn add(&mut self, link: &Link, sign: f64) {
+        let c = link.centre();
+        let m = sign * link.mass_kg;
+        self.mass += m;
+        self.first[0] += m * c[0];
+        self.first[1] += m * c[1];
+        self.second += m * (c[0] * c[0] + c[1] * c[1] + link.length_m * link.length_m / 12.0);
+    }
+
+    fn mass_properties(&self) -> MassProperties {
+        let com = [self.first[0] / self.mass, self.first[1] / self.mass];
+        let inertia = self.second - self.mass * (com[0] * com[0] + com[1] * com[1]);
+        MassProperties::new(Vector::new(com[0], com[1]), self.mass, inertia.max(0.0))
+    }
+}
+
+const TAPE_GROUP: Group = Group::GROUP_1;
+const FLOOR_GROUP: Group = Group::GROUP_2;
+
+/// The contact-resolved tape.
+pub struct Model {
+    world: PhysicsWorld,
+    spiral: Spiral,
+    moments: SpiralMoments,
+    links: Vec<Link>,
+    link_angle: f64,
+    steps_per_link: f64,
+    max_dt: f64,
+    freeze_speed: f64,
+    friction: f64,
+    g: f64,
+    half_b: f64,
+    bang_fraction: f64,
+    settle_time: f64,
+    total_mass: f64,
+
+    ground: RigidBodyHandle,
+    floor: ColliderHandle,
+    coil: Option<RigidBodyHandle>,
+    coil_ball: Option<ColliderHandle>,
+    coil_sums: CoilSums,
+    /// Index of the outermost link still in the coil.
+    first_attached: usize,
+    /// Unwrapped rotation angle of the coil (rad).
+    coil_angle: f64,
+    psi_low: f64,
+
+    free: VecDeque<FreeLink>,
+    frozen_potential_j: f64,
+
+    ledger: EnergyLedger,
+    phase: Phase,
+    t: f64,
+    bang_started_s: f64,
+    last_dt: f64,
+    x_low: f64,
+    chord_ratio: f64,
+    shedding: bool,
+}
+
+impl Model {
+    /// Builds the world for a scene: floor, the wound coil as one body, nothing else.
+    pub fn new(scene: &Scene) -> Self {
+        let tape = &scene.tape;
+        let b = tape.thickness_m;
+        let spiral = Spiral::wound(tape.outer_radius_m, b, tape.core_radius_m);
+        let moments = SpiralMoments::new(spiral);
+        let nodes = spiral.link_nodes(scene.links_per_turn);
+        let chords: Vec<([f64; 2], [f64; 2], f64)> = nodes
+            .windows(2)
+            .map(|w| {
+                let (near, far) = (spiral.point(w[0]), spiral.point(w[1]));
+                let len = (near[0] - far[0]).hypot(near[1] - far[1]);
+                (near, far, len)
+            })
+            .collect();
+        let total_len: f64 = chords.iter().map(|c| c.2).sum();
+        let lambda = tape.mass_kg / total_len;
+        let links: Vec<Link> = chords
+            .into_iter()
+            .map(|(near, far, length_m)| Link {
+                near,
+                far,
+                mass_kg: lambda * length_m,
+                length_m,
+            })
+            .collect();
+
+        let mut world = PhysicsWorld::new();
+        world.gravity = Vector::new(0.0, -scene.g_m_s2);
+        let ip = &mut world.integration_parameters;
+        ip.num_solver_iterations = scene.solver.iterations as usize;
+        // Tolerances scale with the tape: allowed penetration and prediction are fractions
+        // of `length_unit`, so a 0.1 mm tape gets micrometre-sized slop, not millimetres.
+        ip.length_unit = b;
+        ip.dt = scene.solver.max_dt_s;
+
+        let ground = world.insert_body(RigidBodyBuilder::fixed());
+        let floor = world.insert_collider(
+            ColliderBuilder::new(SharedShape::halfspace(Vector::Y))
+                .translation(Vector::new(0.0, 0.5 * b))
+                .friction(scene.friction)
+                .collision_groups(InteractionGroups::new(
+                    FLOOR_GROUP,
+                    TAPE_GROUP,
+                    InteractionTestMode::And,
+                )),
+            Some(ground),
+        );
+
+        let mut coil_sums = CoilSums::default();
+        for link in &links {
+            coil_sums.add(link, 1.0);
+        }
+        let psi_low = spiral.psi_out;
+        let coil_angle = spiral.rotation_with_bottom_at(psi_low);
+        let p = rotate(spiral.point(psi_low), coil_angle);
+        let origin = [-p[0], 0.5 * b - p[1]];
+        let mprops = coil_sums.mass_properties();
+        // Rolling about the peel point at the pushed contact-line speed: x' = omega rho_c.
+        let omega = -scene.push_speed_m_s / spiral.curvature_radius(psi_low);
+        let com_local = mprops.local_com;
+        let com = rotate([com_local.x, com_local.y], coil_angle);
+        let rel = [origin[0] + com[0], origin[1] + com[1] - 0.5 * b];
+        let linvel = Vector::new(-omega * rel[1], omega * rel[0]);
+        let coil = world.insert_body(
+            RigidBodyBuilder::dynamic()
+                .pose(Pose::new(Vector::new(origin[0], origin[1]), coil_angle))
+                .additional_mass_properties(mprops)
+                .linvel(linvel)
+                .angvel(omega)
+                .can_sleep(false),
+        );
+        let coil_ball = world.insert_collider(
+            Self::ball_builder(&spiral, psi_low, scene.friction),
+            Some(coil),
+        );
+        // The engine computes mass properties lazily at the next step; energies are read
+        // before that, so compute them now.
+        world.bodies[coil].recompute_mass_properties_from_colliders(&world.colliders);
+
+        let bang_r = scene.stop.bang_radius_m;
+        Self {
+            world,
+            spiral,
+            moments,
+            links,
+            link_angle: 2.0 * PI / f64::from(scene.links_per_turn),
+            steps_per_link: scene.solver.steps_per_link,
+            max_dt: scene.solver.max_dt_s,
+            freeze_speed: scene.solver.freeze_speed_m_s,
+            friction: scene.friction,
+            g: scene.g_m_s2,
+            half_b: 0.5 * b,
+            bang_fraction: 1.0 - (bang_r / tape.outer_radius_m).powi(2),
+            settle_time: scene.stop.settle_time_s,
+            total_mass: tape.mass_kg,
+            ground,
+            floor,
+            coil: Some(coil),
+            coil_ball: Some(coil_ball),
+            coil_sums,
+            first_attached: 0,
+            coil_angle,
+            psi_low,
+            free: VecDeque::new(),
+            frozen_potential_j: 0.0,
+            ledger: EnergyLedger::default(),
+            phase: Phase::Rolling,
+            t: 0.0,
+            bang_started_s: 0.0,
+            last_dt: 0.0,
+            x_low: 0.0,
+            chord_ratio: 1.0,
+            shedding: true,
+        }
+    }
+
+    fn tape_groups() -> InteractionGroups {
+        InteractionGroups::new(TAPE_GROUP, FLOOR_GROUP, InteractionTestMode::And)
+    }
+
+    /// The coil's contact: the osculating circle of the midline at its lowest point.
+    fn ball_builder(spiral: &Spiral, psi: f64, friction: f64) -> ColliderBuilder {
+        let c = spiral.curvature_centre(psi);
+        ColliderBuilder::ball(spiral.curvature_radius(psi))
+            .density(0.0)
+            .friction(friction)
+            .position(Pose::from_translation(Vector::new(c[0], c[1])))
+            .collision_groups(Self::tape_groups())
+    }
+
+    /// Stops (or resumes) shedding links: the coil then rolls as a rigid spiral. For tests
+    /// and diagnostics of the rolling contact alone.
+    pub fn set_shedding(&mut self, on: bool) {
+        self.shedding = on;
+    }
+
+    /// The current phase.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// Number of links of the tape.
+    pub fn link_count(&self) -> usize {
+        self.links.len()
+    }
+
+    /// The spiral the coil was wound on.
+    pub fn spiral(&self) -> &Spiral {
+        &self.spiral
+    }
+
+    /// Kinetic and potential energy of the whole tape (J).
+    pub fn energy(&self) -> (f64, f64) {
+        let mut kinetic = 0.0;
+        let mut potential = self.frozen_potential_j;
+        for (_, body) in self.world.bodies.iter() {
+            if !body.is_dynamic() {
+                continue;
+            }
+            kinetic += body.kinetic_energy();
+            potential += body.mass() * self.g * body.center_of_mass().y;
+        }
+        (kinetic, potential)
+    }
+
+    fn total_energy(&self) -> f64 {
+        let (k, p) = self.energy();
+        k + p
+    }
+
+    /// The next step's length: at least `steps_per_link` steps per link angle turned by the
+    /// fastest spinning body, and at most `max_dt`.
+    fn next_dt(&self) -> f64 {
+        let spin = self
+            .world
+            .bodies
+            .iter()
+            .filter(|(_, b)| b.is_dynamic())
+            .map(|(_, b)| b.angvel().abs())
+            .fold(0.0, f64::max);
+        if spin > 0.0 {
+            (self.link_angle / (self.steps_per_link * spin)).min(self.max_dt)
+        } else {
+            self.max_dt
+        }
+    }
+
+    /// Advances the model by one adaptive step and reports the state.
+    pub fn step(&mut self) -> Observation {
+        let dt = self.next_dt();
+        self.world.integration_parameters.dt = dt;
+        let before = self.total_energy();
+        self.world.step();
+        self.t += dt;
+        self.last_dt = dt;
+        let after = self.total_energy();
+        match self.phase {
+            Phase::Rolling => self.ledger.step_j += before - after,
+            _ => self.ledger.bang_j += before - after,
+        }
+
+        if let Some(coil) = self.coil {
+            let angle = self.world.bodies[coil].rotation().angle();
+            let mut d = angle - self.coil_angle;
+            d -= (d / (2.0 * PI)).round() * 2.0 * PI;
+            self.coil_angle += d;
+            self.psi_low = self
+                .spiral
+                .lowest_psi(self.coil_angle, self.psi_low)
+                .clamp(self.spiral.psi_in, self.spiral.psi_out);
+            while self.shedding
+                && self.first_attached + 1 < self.links.len()
+                && self.psi_low <= self.far_node_psi(self.first_attached)
+            {
+                self.detach_outermost();
+            }
+            self.refit_ball();
+            if self.laid_fraction() >= self.bang_fraction
+                || self.first_attached + 1 >= self.links.len()
+            {
+                self.release_coil();
+            }
+        }
+        self.freeze_settled();
+        if self.phase == Phase::Bang && self.t - self.bang_started_s >= self.settle_time {
+            self.phase = Phase::Done;
+        }
+        self.observe()
+    }
+
+    fn far_node_psi(&self, k: usize) -> f64 {
+        // Nodes step inward by one link angle from the outer end.
+        #[allow(clippy::cast_precision_loss)]
+        let psi = self.spiral.psi_out - self.link_angle * (k + 1) as f64;
+        psi.max(self.spiral.psi_in)
+    }
+
+    /// Laid mass fraction along the continuous spiral up to the lowest point.
+    pub fn laid_fraction(&self) -> f64 {
+        1.0 - self.moments.at(self.psi_low)[0] / self.spiral.length()
+    }
+
+    fn refit_ball(&mut self) {
+        self.chord_ratio = {
+            let k = self.first_attached.min(self.links.len() - 1);
+            let link = self.links[k];
+            let s = self.spiral.arc(self.far_node_psi(k), self.far_node_psi(k) + self.link_angle);
+            link.length_m / s
+        };
+        let (Some(handle), true) = (self.coil_ball, self.phase == Phase::Rolling) else {
+            return;
+        };
+        let c = self.spiral.curvature_centre(self.psi_low);
+        let collider = &mut self.world.colliders[handle];
+        collider.set_shape(SharedShape::ball(
+            self.spiral.curvature_radius(self.psi_low) * self.chord_ratio,
+        ));
+        collider.set_position_wrt_parent(Pose::from_translation(Vector::new(c[0], c[1])));
+    }
+
+    /// Creates the body of link `k` with the coil's velocity field.
+    fn spawn_link(&mut self, k: usize, coil: RigidBodyHandle) -> RigidBodyHandle {
+        let link = self.links[k];
+        let body = &self.world.bodies[coil];
+        let pose = *body.position();
+        let (linvel, angvel, com) = (body.linvel(), body.angvel(), body.center_of_mass());
+        let c = link.centre();
+        let centre = pose.transform_point(Vector::new(c[0], c[1]));
+        let r = centre - com;
+        let v = linvel + Vector::new(-angvel * r.y, angvel * r.x);
+        let half = 0.5 * link.length_m;
+        let handle = self.world.insert_body(
+            RigidBodyBuilder::dynamic()
+                .pose(Pose::new(centre, self.coil_angle + link.angle()))
+                .additional_mass_properties(MassProperties::new(
+                    Vector::ZERO,
+                    link.mass_kg,
+                    link.mass_kg * link.length_m * link.length_m / 12.0,
+                ))
+                .linvel(v)
+                .angvel(angvel)
+                .can_sleep(false),
+        );
+        self.world.insert_collider(
+            ColliderBuilder::segment(Vector::new(-half, 0.0), Vector::new(half, 0.0))
+                .density(0.0)
+                .friction(self.friction)
+                .collision_groups(Self::tape_groups()),
+            Some(handle),
+        );
+        self.world.bodies[handle].recompute_mass_properties_from_colliders(&self.world.colliders);
+        handle
+    }
+
+    /// Joins the near node of link `k` (body `body`) to whatever holds it: the previous free
+    /// link, or the world if that link is frozen, or nothing for the tape's outer end.
+    fn join_near_node(&mut self, k: usize, body: RigidBodyHandle) {
+        let half = 0.5 * self.links[k].length_m;
+        if let Some(prev) = self.free.back().copied() {
+            let prev_half = 0.5 * self.links[prev.index].length_m;
+            let joint = RevoluteJointBuilder::new()
+                .local_anchor1(Vector::new(-prev_half, 0.0))
+                .local_anchor2(Vector::new(half, 0.0))
+                .contacts_enabled(false);
+            self.world.insert_impulse_joint(prev.body, body, joint);
+        } else if k > 0 {
+            let node = self.world.bodies[body]
+                .position()
+                .transform_point(Vector::new(half, 0.0));
+            let joint = RevoluteJointBuilder::new()
+                .local_anchor1(node)
+                .local_anchor2(Vector::new(half, 0.0))
+                .contacts_enabled(false);
+            self.world
+                .insert_impulse_joint(self.ground, body, joint);
+        }
+    }
+
+    fn detach_outermost(&mut self) {
+        let Some(coil) = self.coil else { return };
+        let before = self.total_energy();
+        let k = self.first_attached;
+        let handle = self.spawn_link(k, coil);
+        // The previous free link was pinned to the coil at this link's near node.
+        if let Some(prev) = self.free.back().copied() {
+            let joints: Vec<_> = self
+                .world
+                .impulse_joints
+                .joints_between(prev.body, coil)
+                .map(|(h, _)| h)
+                .collect();
+            for h in joints {
+                self.world.remove_impulse_joint(h);
+            }
+        }
+        self.join_near_node(k, handle);
+        self.free.push_back(FreeLink { index: k, body: handle });
+        let far = self.links[k].far;
+        let half = 0.5 * self.links[k].length_m;
+        self.world.insert_impulse_joint(
+            handle,
+            coil,
+            RevoluteJointBuilder::new()
+                .local_anchor1(Vector::new(-half, 0.0))
+                .local_anchor2(Vector::new(far[0], far[1]))
+                .contacts_enabled(false),
+        );
+        // Remove the link's mass from the coil, keeping the velocity field.
+        let link = self.links[k];
+        self.coil_sums.add(&link, -1.0);
+        self.first_attached += 1;
+        let body = &mut self.world.bodies[coil];
+        let (v_old, w, com_old) = (body.linvel(), body.angvel(), body.center_of_mass());
+        body.set_additional_mass_properties(self.coil_sums.mass_properties(), true);
+        body.recompute_mass_properties_from_colliders(&self.world.colliders);
+        let r = body.center_of_mass() - com_old;
+        body.set_linvel(v_old + Vector::new(-w * r.y, w * r.x), true);
+        self.ledger.detach_j += before - self.total_energy();
+    }
+
+    /// Releases the remaining wound links as a free chain: the final bang begins.
+    fn release_coil(&mut self) {
+        let Some(coil) = self.coil else { return };
+        let before = self.total_energy();
+        for k in self.first_attached..self.links.len() {
+            let handle = self.spawn_link(k, coil);
+            if k == self.first_attached {
+                if let Some(prev) = self.free.back().copied() {
+                    let joints: Vec<_> = self
+                        .world
+                        .impulse_joints
+                        .joints_between(prev.body, coil)
+                        .map(|(h, _)| h)
+                        .collect();
+                    for h in joints {
+                        self.world.remove_impulse_joint(h);
+                    }
+                }
+            }
+            self.join_near_node(k, handle);
+            self.free.push_back(FreeLink { index: k, body: handle });
+        }
+        self.world.remove_body(coil);
+        self.coil = None;
+        self.coil_ball = None;
+        self.first_attached = self.links.len();
+        self.phase = Phase::Bang;
+        self.bang_started_s = self.t;
+        // Spawning copies the velocity field, so this is zero up to rounding.
+        self.ledger.bang_j += before - self.total_energy();
+    }
+
+    /// Freezes settled links from the laid end: a link whose two nodes move slower than the
+    /// freeze speed and that is not holding the coil is removed from the engine.
+    fn freeze_settled(&mut self) {
+        let min_free = usize::from(self.coil.is_some());
+        while self.free.len() > min_free {
+            let oldest = self.free[0];
+            let body = &self.world.bodies[oldest.body];
+            let half = 0.5 * self.links[oldest.index].length_m;
+            let pose = body.position();
+            let fastest = [half, -half]
+                .into_iter()
+                .map(|s| body.velocity_at_point(pose.transform_point(Vector::new(s, 0.0))).length())
+                .fold(0.0, f64::max);
+            if fastest >= self.freeze_speed {
+                break;
+            }
+            let kinetic = body.kinetic_energy();
+            self.frozen_potential_j += body.mass() * self.g * body.center_of_mass().y;
+            let far_node = pose.transform_point(Vector::new(-half, 0.0));
+            self.world.remove_body(oldest.body);
+            self.free.pop_front();
+            if let Some(next) = self.free.front().copied() {
+                let next_half = 0.5 * self.links[next.index].length_m;
+                let joint = RevoluteJointBuilder::new()
+                    .local_anchor1(far_node)
+                    .local_anchor2(Vector::new(next_half, 0.0))
+                    .contacts_enabled(false);
+                self.world
+                    .insert_impulse_joint(self.ground, next.body, joint);
+            }
+            match self.phase {
+                Phase::Rolling => self.ledger.freeze_j += kinetic,
+                _ => self.ledger.bang_j += kinetic,
+            }
+        }
+    }
+
+    /// Floor forces on the moving tape from the last step's contact impulses (N).
+    fn floor_forces(&self) -> (f64, f64) {
+        let dt = self.last_dt;
+        if dt <= 0.0 {
+            return (0.0, 0.0);
+        }
+        let (mut fx, mut fy) = (0.0, 0.0);
+        for pair in self.world.narrow_phase.contact_pairs_with(self.floor) {
+            let PairContacts::Rigid(contacts) = &pair.contacts else {
+                continue;
+            };
+            // The solver pushes collider 2 along +normal and collider 1 along -normal.
+            let sign = if pair.collider1 == self.floor { 1.0 } else { -1.0 };
+            for manifold in contacts.solver_manifolds() {
+                let n = manifold.data.normal;
+                // Friction acts along perp(-n) on collider 1, the opposite on collider 2.
+                let t = Vector::new(n.y, -n.x);
+                for point in &manifold.points {
+                    let f = n * point.data.impulse - t * point.data.tangent_impulse.x;
+                    fx += sign * f.x / dt;
+                    fy += sign * f.y / dt;
+                }
+            }
+        }
+        (fy, fx)
+    }
+
+    fn max_joint_gap(&self) -> f64 {
+        self.world
+            .impulse_joints
+            .iter()
+            .map(|(_, j)| {
+                let (b1, b2) = (&self.world.bodies[j.body1()], &self.world.bodies[j.body2()]);
+                let a1 = b1.position().transform_point(j.data.local_anchor1());
+                let a2 = b2.position().transform_point(j.data.local_anchor2());
+                (a1 - a2).length()
+            })
+            .fold(0.0, f64::max)
+    }
+
+    fn max_penetration(&self) -> f64 {
+        let mut deepest: f64 = 0.0;
+        for pair in self.world.narrow_phase.contact_pairs_with(self.floor) {
+            if let PairContacts::Rigid(contacts) = &pair.contacts {
+                for m in &contacts.manifolds {
+                    for p in &m.points {
+                        deepest = deepest.max(-p.dist);
+                    }
+                }
+            }
+        }
+        deepest
+    }
+
+    /// The state after the last step.
+    pub fn observe(&mut self) -> Observation {
+        let (kinetic_j, potential_j) = self.energy();
+        let (normal_n, friction_n) = self.floor_forces();
+        let (x_m, omega) = match self.coil {
+            Some(coil) => {
+                let body = &self.world.bodies[coil];
+                let p = self.spiral.point(self.psi_low);
+                (
+                    body.position().transform_point(Vector::new(p[0], p[1])).x,
+                    -body.angvel(),
+                    )
+            }
+            None => (self.x_low, 0.0),
+        };
+        self.x_low = x_m;
+        Observation {
+            t_s: self.t,
+            phase: self.phase,
+            laid_fraction: self.laid_fraction(),
+            psi_low: self.psi_low,
+            x_m,
+            omega_rad_s: omega,
+            kinetic_j,
+            potential_j,
+            normal_n,
+            friction_n,
+            ledger: self.ledger,
+            detached: self.first_attached,
+            active_bodies: self.world.bodies.len() - 1,
+            max_joint_gap_m: self.max_joint_gap(),
+            max_penetration_m: self.max_penetration(),
+            dt_s: self.last_dt,
+        }
+    }
+
+    /// Total tape mass (kg).
+    pub fn total_mass(&self) -> f64 {
+        self.total_mass
+    }
+
+    /// Potential energy of the tape lying flat, midline at `b/2` (J).
+    pub fn flat_potential_j(&self) -> f64 {
+        self.total_mass * self.g * self.half_b
+    }
+}

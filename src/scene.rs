@@ -1,0 +1,916 @@
+//! Scene files: parses a TOML scene description and validates it into a [`Scene`] of plain
+//! numbers; it does not simulate anything, derive physical quantities, or re-check a `Scene`
+//! after construction (a `Scene` that exists is valid).
+//!
+//! The TOML is read into a private serde mirror (`SceneFile`, every section
+//! `deny_unknown_fields`, defaults filled by serde), then every value is checked once, in
+//! dependency order, and the first violation is reported as [`SceneError::Invalid`] naming
+//! the key with its section path, the offending value and the rule.
+
+use std::fmt::Display;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+/// Default `discretisation.links_per_turn`.
+const DEFAULT_LINKS_PER_TURN: i64 = 32;
+/// Default `floor.friction`.
+const DEFAULT_FRICTION: f64 = 1.0;
+/// Default `gravity.g_m_s2`.
+const DEFAULT_G_M_S2: f64 = 9.81;
+/// Default `push.contact_speed_m_s`.
+const DEFAULT_CONTACT_SPEED_M_S: f64 = 0.0;
+/// Default `solver.max_dt_s`.
+const DEFAULT_MAX_DT_S: f64 = 0.001;
+/// Default `solver.steps_per_link`.
+const DEFAULT_STEPS_PER_LINK: f64 = 4.0;
+/// Default `solver.iterations`.
+const DEFAULT_ITERATIONS: i64 = 4;
+/// Default `solver.freeze_speed_m_s`.
+const DEFAULT_FREEZE_SPEED_M_S: f64 = 0.001;
+/// Default `stop.max_time_s`.
+const DEFAULT_MAX_TIME_S: f64 = 60.0;
+/// Default `stop.settle_time_s`.
+const DEFAULT_SETTLE_TIME_S: f64 = 0.05;
+/// Default `output.sample_interval_s`.
+const DEFAULT_SAMPLE_INTERVAL_S: f64 = 0.001;
+
+/// Bounds of `discretisation.links_per_turn`.
+const LINKS_PER_TURN_RANGE: std::ops::RangeInclusive<i64> = 3..=4096;
+/// Bounds of `solver.iterations`.
+const ITERATIONS_RANGE: std::ops::RangeInclusive<i64> = 1..=1000;
+/// Upper bound of `gravity.g_m_s2` (m/s²).
+const MAX_G_M_S2: f64 = 1000.0;
+/// Upper bound of `push.contact_speed_m_s` (m/s).
+const MAX_CONTACT_SPEED_M_S: f64 = 1000.0;
+/// Upper bound of `solver.max_dt_s` (s).
+const MAX_MAX_DT_S: f64 = 0.1;
+
+/// Why a scene could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The scene file could not be read.
+    #[error("cannot read scene file {}: {source}", path.display())]
+    Read {
+        /// Path of the file that could not be read.
+        path: PathBuf,
+        /// Underlying I/O error.
+        source: std::io::Error,
+    },
+    /// The text is not valid TOML or does not match the scene schema (unknown key, wrong
+    /// type, missing required key).
+    #[error("cannot parse scene {name}: {message}")]
+    Parse {
+        /// Name of the scene (file stem, or the name passed to [`Scene::from_toml_str`]).
+        name: String,
+        /// The TOML parser's message, with line and column.
+        message: String,
+    },
+    /// A value is out of its allowed range.
+    #[error("{key} = {value}: {rule}")]
+    Invalid {
+        /// Key with its section path, e.g. `tape.thickness_m`.
+        key: String,
+        /// The offending value as written by `Display` (`NaN`, `inf`, `-0.001`, ...).
+        value: String,
+        /// The rule the value breaks.
+        rule: String,
+    },
+}
+
+/// How the links of the coil touch each other.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ContactModel {
+    /// Contacts between neighbouring turns of the spiral (`"spiral"`).
+    #[default]
+    Spiral,
+}
+
+/// The tape and its winding.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Tape {
+    /// Outer radius R of the wound coil (outer surface), m (required, no default).
+    pub outer_radius_m: f64,
+    /// Tape thickness b, which is also the spiral pitch, m (required, no default).
+    pub thickness_m: f64,
+    /// Total tape mass M, kg (required, no default).
+    pub mass_kg: f64,
+    /// Inner radius of the winding (a hollow, massless core), m (default: 0.0).
+    pub core_radius_m: f64,
+}
+
+/// Time-stepping and rapier solver settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Solver {
+    /// Largest time step, s (default: 0.001).
+    pub max_dt_s: f64,
+    /// Adaptive step rule: at least this many steps while the coil turns by one link angle,
+    /// dimensionless (default: 4.0).
+    pub steps_per_link: f64,
+    /// Rapier solver iterations per step, count (default: 4).
+    pub iterations: u32,
+    /// A laid link slower than this is frozen (removed from the engine), m/s
+    /// (default: 0.001).
+    pub freeze_speed_m_s: f64,
+}
+
+/// When the simulation ends.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Stop {
+    /// Coil radius at which the rolling phase ends and the final bang begins, m
+    /// (default: `tape.core_radius_m + 2 * tape.thickness_m`, i.e. `2 * thickness_m` for a
+    /// solid coil).
+    pub bang_radius_m: f64,
+    /// Hard stop on simulated time, s (default: 60.0).
+    pub max_time_s: f64,
+    /// Simulated time given to the final bang to settle, s (default: 0.05).
+    pub settle_time_s: f64,
+}
+
+/// A validated scene: every value is finite and within its documented range.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Scene {
+    /// Scene name (default: the file stem, or the name passed to [`Scene::from_toml_str`]).
+    pub name: String,
+    /// The tape and its winding (section `[tape]`, required).
+    pub tape: Tape,
+    /// Links per full turn of the spiral, count (default: 32). Link length scales with the
+    /// local radius, so every turn is resolved to the same angle.
+    pub links_per_turn: u32,
+    /// Coulomb friction coefficient between tape and floor, dimensionless (default: 1.0).
+    pub friction: f64,
+    /// Gravitational acceleration, m/s² (default: 9.81).
+    pub g_m_s2: f64,
+    /// Initial speed of the contact line, m/s (default: 0.0, which is rejected: a scene
+    /// must set it > 0).
+    pub push_speed_m_s: f64,
+    /// Time-stepping and solver settings.
+    pub solver: Solver,
+    /// How the links of the coil touch each other (default: [`ContactModel::Spiral`]).
+    pub contact_model: ContactModel,
+    /// When the simulation ends.
+    pub stop: Stop,
+    /// Time between rows of `samples.csv`, s; 0 samples every step (default: 0.001).
+    pub sample_interval_s: f64,
+    /// The TOML text as read, for logging.
+    pub source_text: String,
+}
+
+// ---------------------------------------------------------------------------------------
+// Serde mirror of the file. Integers are read as i64 so that out-of-range values reach
+// validation and get the same `key = value: rule` message as floats.
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    name: Option<String>,
+    tape: TapeFile,
+    #[serde(default)]
+    discretisation: DiscretisationFile,
+    #[serde(default)]
+    floor: FloorFile,
+    #[serde(default)]
+    gravity: GravityFile,
+    #[serde(default)]
+    push: PushFile,
+    #[serde(default)]
+    solver: SolverFile,
+    #[serde(default)]
+    contact: ContactFile,
+    #[serde(default)]
+    stop: StopFile,
+    #[serde(default)]
+    output: OutputFile,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TapeFile {
+    outer_radius_m: f64,
+    thickness_m: f64,
+    mass_kg: f64,
+    #[serde(default)]
+    core_radius_m: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct DiscretisationFile {
+    links_per_turn: i64,
+}
+
+impl Default for DiscretisationFile {
+    fn default() -> Self {
+        Self {
+            links_per_turn: DEFAULT_LINKS_PER_TURN,
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct FloorFile {
+    friction: f64,
+}
+
+impl Default for FloorFile {
+    fn default() -> Self {
+        Self {
+            friction: DEFAULT_FRICTION,
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct GravityFile {
+    g_m_s2: f64,
+}
+
+impl Default for GravityFile {
+    fn default() -> Self {
+        Self {
+            g_m_s2: DEFAULT_G_M_S2,
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct PushFile {
+    contact_speed_m_s: f64,
+}
+
+impl Default for PushFile {
+    fn default() -> Self {
+        Self {
+            contact_speed_m_s: DEFAULT_CONTACT_SPEED_M_S,
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct SolverFile {
+    max_dt_s: f64,
+    steps_per_link: f64,
+    iterations: i64,
+    freeze_speed_m_s: f64,
+}
+
+impl Default for SolverFile {
+    fn default() -> Self {
+        Self {
+            max_dt_s: DEFAULT_MAX_DT_S,
+            steps_per_link: DEFAULT_STEPS_PER_LINK,
+            iterations: DEFAULT_ITERATIONS,
+            freeze_speed_m_s: DEFAULT_FREEZE_SPEED_M_S,
+        }
+    }
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct ContactFile {
+    model: ContactModel,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct StopFile {
+    /// `None` means "derive from the tape" (see [`Stop::bang_radius_m`]).
+    bang_radius_m: Option<f64>,
+    max_time_s: f64,
+    settle_time_s: f64,
+}
+
+impl Default for StopFile {
+    fn default() -> Self {
+        Self {
+            bang_radius_m: None,
+            max_time_s: DEFAULT_MAX_TIME_S,
+            settle_time_s: DEFAULT_SETTLE_TIME_S,
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct OutputFile {
+    sample_interval_s: f64,
+}
+
+impl Default for OutputFile {
+    fn default() -> Self {
+        Self {
+            sample_interval_s: DEFAULT_SAMPLE_INTERVAL_S,
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Validation helpers.
+
+fn invalid(key: &str, value: impl Display, rule: impl Into<String>) -> SceneError {
+    SceneError::Invalid {
+        key: key.to_owned(),
+        value: value.to_string(),
+        rule: rule.into(),
+    }
+}
+
+/// Rejects NaN and infinities, then returns `value` if `ok`, else an error with `rule`.
+/// `ok` is evaluated by the caller; for a non-finite value the finiteness error wins.
+fn check(key: &str, value: f64, ok: bool, rule: impl Into<String>) -> Result<f64, SceneError> {
+    if !value.is_finite() {
+        return Err(invalid(key, value, "must be finite"));
+    }
+    if ok {
+        Ok(value)
+    } else {
+        Err(invalid(key, value, rule))
+    }
+}
+
+/// Returns `value` as `u32` if it lies in `range`, else an error with `rule`.
+fn check_int(
+    key: &str,
+    value: i64,
+    range: &std::ops::RangeInclusive<i64>,
+) -> Result<u32, SceneError> {
+    match u32::try_from(value) {
+        Ok(v) if range.contains(&value) => Ok(v),
+        _ => Err(invalid(
+            key,
+            value,
+            format!("must be >= {} and <= {}", range.start(), range.end()),
+        )),
+    }
+}
+
+impl Scene {
+    /// Reads and validates the scene file at `path`; the scene name defaults to the file
+    /// stem.
+    pub fn from_file(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+        let stem = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        Self::from_toml_str(&text, &stem)
+    }
+
+    /// Parses and validates scene TOML `text`; `name` is used when the text has no
+    /// top-level `name` key.
+    pub fn from_toml_str(text: &str, name: &str) -> Result<Scene, SceneError> {
+        let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
+            name: name.to_owned(),
+            message: e.to_string(),
+        })?;
+        Self::validate(file, name, text)
+    }
+
+    /// Checks every value of `file` once, in dependency order (later rules may rely on
+    /// earlier values being valid).
+    fn validate(file: SceneFile, default_name: &str, text: &str) -> Result<Scene, SceneError> {
+        let name = file.name.unwrap_or_else(|| default_name.to_owned());
+        if name.trim().is_empty() {
+            return Err(invalid("name", format!("{name:?}"), "must not be empty"));
+        }
+
+        // [tape]
+        let t = &file.tape;
+        let r = check(
+            "tape.outer_radius_m",
+            t.outer_radius_m,
+            t.outer_radius_m > 0.0,
+            "must be > 0",
+        )?;
+        let b = check(
+            "tape.thickness_m",
+            t.thickness_m,
+            t.thickness_m > 0.0 && t.thickness_m < r / 2.0,
+            format!(
+                "must be > 0 and < tape.outer_radius_m / 2 (= {}): at least one full turn",
+                r / 2.0
+            ),
+        )?;
+        let mass = check("tape.mass_kg", t.mass_kg, t.mass_kg > 0.0, "must be > 0")?;
+        let core = check(
+            "tape.core_radius_m",
+            t.core_radius_m,
+            t.core_radius_m >= 0.0 && t.core_radius_m + 2.0 * b <= r,
+            format!(
+                "must be >= 0 and <= tape.outer_radius_m - 2 * tape.thickness_m (= {}): \
+                 must leave at least two turns of tape",
+                r - 2.0 * b
+            ),
+        )?;
+        let tape = Tape {
+            outer_radius_m: r,
+            thickness_m: b,
+            mass_kg: mass,
+            core_radius_m: core,
+        };
+
+        // [discretisation]
+        let key = "discretisation.links_per_turn";
+        let links_per_turn = check_int(
+            key,
+            file.discretisation.links_per_turn,
+            &LINKS_PER_TURN_RANGE,
+        )?;
+        let outer_link_m = 2.0 * std::f64::consts::PI * (r - b / 2.0) / f64::from(links_per_turn);
+        if outer_link_m > r {
+            return Err(invalid(
+                key,
+                links_per_turn,
+                format!(
+                    "a link must be shorter than the outer radius (outermost link {outer_link_m} m \
+                     > tape.outer_radius_m = {r} m)"
+                ),
+            ));
+        }
+
+        // [floor], [gravity], [push]
+        let friction = check(
+            "floor.friction",
+            file.floor.friction,
+            file.floor.friction >= 0.0,
+            "must be >= 0",
+        )?;
+        let g = file.gravity.g_m_s2;
+        let g = check(
+            "gravity.g_m_s2",
+            g,
+            (0.0..=MAX_G_M_S2).contains(&g),
+            format!("must be >= 0 and <= {MAX_G_M_S2}"),
+        )?;
+        let key = "push.contact_speed_m_s";
+        let v = file.push.contact_speed_m_s;
+        let push = check(
+            key,
+            v,
+            (0.0..=MAX_CONTACT_SPEED_M_S).contains(&v),
+            format!("must be > 0 and <= {MAX_CONTACT_SPEED_M_S}"),
+        )?;
+        if push <= 0.0 {
+            let rule = if g <= 0.0 {
+                "must be > 0 when gravity.g_m_s2 = 0: nothing would move"
+            } else {
+                "must be > 0: a coil at rest on a level floor stays at rest"
+            };
+            return Err(invalid(key, push, rule));
+        }
+
+        // [solver]
+        let s = &file.solver;
+        let solver = Solver {
+            max_dt_s: check(
+                "solver.max_dt_s",
+                s.max_dt_s,
+                s.max_dt_s > 0.0 && s.max_dt_s <= MAX_MAX_DT_S,
+                format!("must be > 0 and <= {MAX_MAX_DT_S}"),
+            )?,
+            steps_per_link: check(
+                "solver.steps_per_link",
+                s.steps_per_link,
+                s.steps_per_link >= 1.0,
+                "must be >= 1",
+            )?,
+            iterations: check_int("solver.iterations", s.iterations, &ITERATIONS_RANGE)?,
+            freeze_speed_m_s: check(
+                "solver.freeze_speed_m_s",
+                s.freeze_speed_m_s,
+                s.freeze_speed_m_s >= 0.0,
+                "must be >= 0",
+            )?,
+        };
+
+        // [contact]
+        let contact_model = file.contact.model;
+
+        // [stop]
+        let st = &file.stop;
+        let (bang, defaulted) = match st.bang_radius_m {
+            Some(v) => (v, ""),
+            None => (
+                core + 2.0 * b,
+                " (defaulted to tape.core_radius_m + 2 * tape.thickness_m; set it explicitly)",
+            ),
+        };
+        let stop = Stop {
+            bang_radius_m: check(
+                "stop.bang_radius_m",
+                bang,
+                core < bang && bang < r,
+                format!(
+                    "must be > tape.core_radius_m (= {core}) \
+                     and < tape.outer_radius_m (= {r}){defaulted}"
+                ),
+            )?,
+            max_time_s: check(
+                "stop.max_time_s",
+                st.max_time_s,
+                st.max_time_s > 0.0,
+                "must be > 0",
+            )?,
+            settle_time_s: check(
+                "stop.settle_time_s",
+                st.settle_time_s,
+                st.settle_time_s >= 0.0,
+                "must be >= 0",
+            )?,
+        };
+
+        // [output]
+        let sample_interval_s = check(
+            "output.sample_interval_s",
+            file.output.sample_interval_s,
+            file.output.sample_interval_s >= 0.0,
+            "must be >= 0",
+        )?;
+
+        Ok(Scene {
+            name,
+            tape,
+            links_per_turn,
+            friction,
+            g_m_s2: g,
+            push_speed_m_s: push,
+            solver,
+            contact_model,
+            stop,
+            sample_interval_s,
+            source_text: text.to_owned(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    const MINIMAL: &str = "
+[tape]
+outer_radius_m = 0.06
+thickness_m = 0.005
+mass_kg = 1.5
+
+[push]
+contact_speed_m_s = 0.3
+";
+
+    fn shipped(name: &str) -> Scene {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("scenes")
+            .join(format!("{name}.toml"));
+        Scene::from_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    }
+
+    /// Error text of loading `text`, which must fail.
+    fn err(text: &str) -> String {
+        match Scene::from_toml_str(text, "test") {
+            Ok(s) => panic!("expected an error, got {s:?}"),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    /// `MINIMAL` with `key = value` set in `[section]` (replacing an existing key).
+    fn with(section: &str, key: &str, value: &str) -> String {
+        let mut out = String::new();
+        let mut in_section = false;
+        let mut done = false;
+        for line in MINIMAL.lines() {
+            if line.starts_with('[') {
+                if in_section && !done {
+                    out.push_str(&format!("{key} = {value}\n"));
+                    done = true;
+                }
+                in_section = line == format!("[{section}]");
+            }
+            if in_section && line.split('=').next().map(str::trim) == Some(key) {
+                out.push_str(&format!("{key} = {value}\n"));
+                done = true;
+                continue;
+            }
+            out.push_str(line);
+            out.push('\n');
+        }
+        if !done {
+            if !in_section {
+                out.push_str(&format!("[{section}]\n"));
+            }
+            out.push_str(&format!("{key} = {value}\n"));
+        }
+        out
+    }
+
+    /// Asserts that setting `section.key = value` is rejected with a message naming the key.
+    fn rejects(section: &str, key: &str, value: &str) -> String {
+        let msg = err(&with(section, key, value));
+        assert!(
+            msg.starts_with(&format!("{section}.{key} = ")),
+            "{section}.{key} = {value}: message does not name the key: {msg}"
+        );
+        msg
+    }
+
+    #[test]
+    fn yoga_mat_loads() {
+        let s = shipped("yoga-mat");
+        assert_eq!(s.name, "yoga-mat");
+        assert_relative_eq!(s.tape.outer_radius_m, 0.06);
+        assert_relative_eq!(s.tape.thickness_m, 0.005);
+        assert_relative_eq!(s.tape.mass_kg, 1.5);
+        assert_relative_eq!(s.tape.core_radius_m, 0.0);
+        assert_eq!(s.links_per_turn, 32);
+        assert_relative_eq!(s.friction, 1.0);
+        assert_relative_eq!(s.g_m_s2, 9.81);
+        assert_relative_eq!(s.push_speed_m_s, 0.3);
+        assert_relative_eq!(s.solver.max_dt_s, 0.001);
+        assert_relative_eq!(s.solver.steps_per_link, 4.0);
+        assert_eq!(s.solver.iterations, 4);
+        assert_relative_eq!(s.solver.freeze_speed_m_s, 0.001);
+        assert_eq!(s.contact_model, ContactModel::Spiral);
+        assert_relative_eq!(s.stop.bang_radius_m, 0.01);
+        assert_relative_eq!(s.stop.max_time_s, 60.0);
+        assert_relative_eq!(s.stop.settle_time_s, 0.05);
+        assert_relative_eq!(s.sample_interval_s, 0.001);
+        assert!(s.source_text.contains("[tape]"));
+    }
+
+    #[test]
+    fn thin_tape_loads() {
+        let s = shipped("thin-tape");
+        assert_eq!(s.name, "thin-tape");
+        assert_relative_eq!(s.tape.outer_radius_m, 0.03);
+        assert_relative_eq!(s.tape.thickness_m, 0.0001);
+        assert_relative_eq!(s.tape.mass_kg, 0.2);
+        assert_relative_eq!(s.tape.core_radius_m, 0.0);
+        assert_eq!(s.links_per_turn, 24);
+        assert_relative_eq!(s.friction, 1.0);
+        assert_relative_eq!(s.g_m_s2, 9.81);
+        assert_relative_eq!(s.push_speed_m_s, 0.1);
+        assert_relative_eq!(s.solver.max_dt_s, 0.001);
+        assert_relative_eq!(s.solver.steps_per_link, 4.0);
+        assert_eq!(s.solver.iterations, 4);
+        assert_relative_eq!(s.solver.freeze_speed_m_s, 0.001);
+        assert_eq!(s.contact_model, ContactModel::Spiral);
+        assert_relative_eq!(s.stop.bang_radius_m, 0.0002);
+        assert_relative_eq!(s.stop.max_time_s, 60.0);
+        assert_relative_eq!(s.stop.settle_time_s, 0.05);
+        assert_relative_eq!(s.sample_interval_s, 0.001);
+    }
+
+    #[test]
+    fn shipped_scenes_equal_their_defaults() {
+        // The shipped files write out default values; dropping them must not change the scene.
+        let s = shipped("yoga-mat");
+        let d = Scene::from_toml_str(MINIMAL, "yoga-mat").unwrap();
+        assert_eq!(
+            Scene {
+                source_text: String::new(),
+                ..s
+            },
+            Scene {
+                source_text: String::new(),
+                ..d
+            }
+        );
+    }
+
+    #[test]
+    fn defaults_applied() {
+        let s = Scene::from_toml_str(MINIMAL, "fallback").unwrap();
+        assert_eq!(s.name, "fallback");
+        assert_relative_eq!(s.tape.core_radius_m, 0.0);
+        assert_eq!(s.links_per_turn, 32);
+        assert_relative_eq!(s.friction, 1.0);
+        assert_relative_eq!(s.g_m_s2, 9.81);
+        assert_relative_eq!(s.solver.max_dt_s, 0.001);
+        assert_relative_eq!(s.solver.steps_per_link, 4.0);
+        assert_eq!(s.solver.iterations, 4);
+        assert_relative_eq!(s.solver.freeze_speed_m_s, 0.001);
+        assert_eq!(s.contact_model, ContactModel::Spiral);
+        assert_relative_eq!(s.stop.bang_radius_m, 2.0 * 0.005);
+        assert_relative_eq!(s.stop.max_time_s, 60.0);
+        assert_relative_eq!(s.stop.settle_time_s, 0.05);
+        assert_relative_eq!(s.sample_interval_s, 0.001);
+        assert_eq!(s.source_text, MINIMAL);
+    }
+
+    #[test]
+    fn name_key_overrides_fallback() {
+        let s = Scene::from_toml_str(&format!("name = \"mine\"\n{MINIMAL}"), "fallback").unwrap();
+        assert_eq!(s.name, "mine");
+        assert!(err(&format!("name = \" \"\n{MINIMAL}")).starts_with("name = "));
+    }
+
+    #[test]
+    fn integer_literal_accepted_for_float() {
+        let s = Scene::from_toml_str(&with("tape", "mass_kg", "2"), "t").unwrap();
+        assert_relative_eq!(s.tape.mass_kg, 2.0);
+    }
+
+    #[test]
+    fn default_bang_radius_follows_core() {
+        let s = Scene::from_toml_str(&with("tape", "core_radius_m", "0.02"), "t").unwrap();
+        assert_relative_eq!(s.stop.bang_radius_m, 0.03);
+    }
+
+    #[test]
+    fn unknown_key_named_with_expected_keys() {
+        let msg = err(&with("tape", "colour", "\"red\""));
+        assert!(msg.contains("unknown field `colour`"), "{msg}");
+        assert!(msg.contains("outer_radius_m"), "{msg}");
+        assert!(msg.contains("core_radius_m"), "{msg}");
+
+        let msg = err(&format!("{MINIMAL}\n[wind]\nspeed = 1.0\n"));
+        assert!(msg.contains("unknown field `wind`"), "{msg}");
+        assert!(msg.contains("discretisation"), "{msg}");
+
+        let msg = err(&with("solver", "dt", "0.1"));
+        assert!(msg.contains("unknown field `dt`"), "{msg}");
+        assert!(msg.contains("max_dt_s"), "{msg}");
+    }
+
+    #[test]
+    fn missing_required_key() {
+        let msg =
+            err("[tape]\nouter_radius_m = 0.06\nmass_kg = 1.5\n[push]\ncontact_speed_m_s = 0.3\n");
+        assert!(msg.contains("thickness_m"), "{msg}");
+        let msg = err("[push]\ncontact_speed_m_s = 0.3\n");
+        assert!(msg.contains("tape"), "{msg}");
+    }
+
+    #[test]
+    fn wrong_type_rejected() {
+        let msg = err(&with("tape", "mass_kg", "\"heavy\""));
+        assert!(msg.contains("invalid type"), "{msg}");
+        let msg = err(&with("discretisation", "links_per_turn", "32.5"));
+        assert!(msg.contains("invalid type"), "{msg}");
+        let msg = err(&with("contact", "model", "\"bristle\""));
+        assert!(msg.contains("unknown variant `bristle`"), "{msg}");
+        assert!(msg.contains("spiral"), "{msg}");
+    }
+
+    #[test]
+    fn read_error_names_path() {
+        let e = Scene::from_file("/nonexistent/scene.toml").unwrap_err();
+        assert!(matches!(e, SceneError::Read { .. }));
+        assert!(e.to_string().contains("/nonexistent/scene.toml"), "{e}");
+    }
+
+    #[test]
+    fn non_finite_rejected() {
+        for (section, key) in [
+            ("tape", "outer_radius_m"),
+            ("tape", "thickness_m"),
+            ("tape", "mass_kg"),
+            ("tape", "core_radius_m"),
+            ("floor", "friction"),
+            ("gravity", "g_m_s2"),
+            ("push", "contact_speed_m_s"),
+            ("solver", "max_dt_s"),
+            ("solver", "steps_per_link"),
+            ("solver", "freeze_speed_m_s"),
+            ("stop", "bang_radius_m"),
+            ("stop", "max_time_s"),
+            ("stop", "settle_time_s"),
+            ("output", "sample_interval_s"),
+        ] {
+            let msg = rejects(section, key, "nan");
+            assert_eq!(msg, format!("{section}.{key} = NaN: must be finite"));
+            let msg = rejects(section, key, "inf");
+            assert_eq!(msg, format!("{section}.{key} = inf: must be finite"));
+        }
+    }
+
+    #[test]
+    fn numeric_rules() {
+        let msg = rejects("tape", "thickness_m", "-0.001");
+        assert!(
+            msg.starts_with("tape.thickness_m = -0.001: must be > 0 and < tape.outer_radius_m / 2"),
+            "{msg}"
+        );
+        for (section, key, bad) in [
+            ("tape", "outer_radius_m", "0.0"),
+            ("tape", "outer_radius_m", "-1.0"),
+            ("tape", "thickness_m", "0.0"),
+            ("tape", "thickness_m", "0.03"),
+            ("tape", "mass_kg", "0.0"),
+            ("tape", "core_radius_m", "-0.01"),
+            ("tape", "core_radius_m", "0.0501"),
+            ("discretisation", "links_per_turn", "2"),
+            ("discretisation", "links_per_turn", "-1"),
+            ("discretisation", "links_per_turn", "4097"),
+            ("discretisation", "links_per_turn", "5"),
+            ("floor", "friction", "-0.1"),
+            ("gravity", "g_m_s2", "-9.81"),
+            ("gravity", "g_m_s2", "1000.1"),
+            ("push", "contact_speed_m_s", "-0.3"),
+            ("push", "contact_speed_m_s", "1000.1"),
+            ("push", "contact_speed_m_s", "0.0"),
+            ("solver", "max_dt_s", "0.0"),
+            ("solver", "max_dt_s", "0.2"),
+            ("solver", "steps_per_link", "0.5"),
+            ("solver", "iterations", "0"),
+            ("solver", "iterations", "1001"),
+            ("solver", "iterations", "-4"),
+            ("solver", "freeze_speed_m_s", "-0.001"),
+            ("stop", "bang_radius_m", "0.0"),
+            ("stop", "bang_radius_m", "0.06"),
+            ("stop", "max_time_s", "0.0"),
+            ("stop", "settle_time_s", "-0.01"),
+            ("output", "sample_interval_s", "-0.001"),
+        ] {
+            let msg = rejects(section, key, bad);
+            assert!(msg.contains(": must") || msg.contains(": a link"), "{msg}");
+        }
+    }
+
+    #[test]
+    fn boundary_values_accepted() {
+        for (section, key, ok) in [
+            ("tape", "core_radius_m", "0.0499"),
+            ("discretisation", "links_per_turn", "4096"),
+            ("floor", "friction", "0.0"),
+            ("gravity", "g_m_s2", "0.0"),
+            ("gravity", "g_m_s2", "1000.0"),
+            ("push", "contact_speed_m_s", "1000.0"),
+            ("solver", "max_dt_s", "0.1"),
+            ("solver", "steps_per_link", "1.0"),
+            ("solver", "iterations", "1"),
+            ("solver", "iterations", "1000"),
+            ("solver", "freeze_speed_m_s", "0.0"),
+            ("stop", "settle_time_s", "0.0"),
+            ("output", "sample_interval_s", "0.0"),
+        ] {
+            // core_radius_m = R - 2b leaves no room for the default bang radius: set it.
+            let text = if key == "core_radius_m" {
+                MINIMAL.replace("mass_kg = 1.5", &format!("mass_kg = 1.5\n{key} = {ok}"))
+                    + "[stop]\nbang_radius_m = 0.055\n"
+            } else {
+                with(section, key, ok)
+            };
+            if let Err(e) = Scene::from_toml_str(&text, "t") {
+                panic!("{section}.{key} = {ok} rejected: {e}");
+            }
+        }
+    }
+
+    #[test]
+    fn link_must_fit_outer_turn() {
+        // Thin tape: the outermost link at 6 links per turn is ~1.047 R.
+        let msg = err(&with("discretisation", "links_per_turn", "6"));
+        assert!(
+            msg.starts_with(
+                "discretisation.links_per_turn = 6: a link must be shorter than the outer radius"
+            ),
+            "{msg}"
+        );
+        assert!(Scene::from_toml_str(&with("discretisation", "links_per_turn", "7"), "t").is_ok());
+    }
+
+    #[test]
+    fn push_rules() {
+        let msg = rejects("push", "contact_speed_m_s", "0.0");
+        assert!(
+            msg.ends_with("must be > 0: a coil at rest on a level floor stays at rest"),
+            "{msg}"
+        );
+        let text = with("push", "contact_speed_m_s", "0.0") + "[gravity]\ng_m_s2 = 0.0\n";
+        let msg = err(&text);
+        assert_eq!(
+            msg,
+            "push.contact_speed_m_s = 0: must be > 0 when gravity.g_m_s2 = 0: nothing would move"
+        );
+        // A push without gravity is a valid scene.
+        let text = format!("{MINIMAL}[gravity]\ng_m_s2 = 0.0\n");
+        assert!(Scene::from_toml_str(&text, "t").is_ok());
+    }
+
+    #[test]
+    fn defaulted_bang_radius_error_says_so() {
+        // core = R - 2b (exact in binary): the default bang radius equals R.
+        let text = "[tape]\nouter_radius_m = 1.0\nthickness_m = 0.25\nmass_kg = 1.0\n\
+                    core_radius_m = 0.5\n[push]\ncontact_speed_m_s = 0.3\n";
+        let msg = err(text);
+        assert!(msg.starts_with("stop.bang_radius_m = 1: "), "{msg}");
+        assert!(msg.contains("defaulted"), "{msg}");
+    }
+
+    #[test]
+    fn scene_serialises() {
+        let json = serde_json::to_value(shipped("yoga-mat")).unwrap();
+        assert_eq!(json["contact_model"], "spiral");
+        assert_eq!(json["tape"]["mass_kg"], 1.5);
+    }
+}
