@@ -1,26 +1,70 @@
-use uncoil::model::{Model, Phase};
+//! The `uncoil` command line: `uncoil run SCENE [--out DIR]`.
+//!
+//! Results go to stdout, diagnostics to stderr. Exit codes: 0 success, 1 a failure during
+//! the run (e.g. an output file could not be written), 2 bad input (scene or usage).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context as _;
+use clap::{Parser, Subcommand};
+
+use uncoil::output::{CsvObserver, ReportObserver, summary};
+use uncoil::run::{Observer, run};
 use uncoil::scene::Scene;
-fn main() {
-    let path = std::env::args().nth(1).unwrap();
-    let scene = Scene::from_file(&path).unwrap();
-    let mut m = Model::new(&scene);
-    if std::env::var("NOSHED").is_ok() { m.set_shedding(false); }
-    let (k0, p0) = m.energy();
-    let e0 = k0 + p0;
-    println!("links {} E0 {e0}", m.link_count());
-    let t0 = std::time::Instant::now();
-    let mut n = 0u64;
-    let mut next = 0.0;
-    loop {
-        let o = m.step();
-        n += 1;
-        if o.t_s >= next || o.phase == Phase::Done {
-            next += if o.t_s > 2.0 && o.t_s < 2.3 { 0.005 } else { 0.05 };
-            println!("t {:.3} f {:.4} x {:.4} w {:.2} K {:.4} P {:.4} lost {:.4} [{:.4} {:.4} {:.4} {:.4}] N {:.3} F {:.3} bodies {} gap {:.2e} pen {:.2e} dt {:.1e}",
-              o.t_s, o.laid_fraction, o.x_m, o.omega_rad_s, o.kinetic_j, o.potential_j, e0 - o.kinetic_j - o.potential_j,
-              o.ledger.step_j, o.ledger.detach_j, o.ledger.freeze_j, o.ledger.bang_j, o.normal_n, o.friction_n, o.active_bodies, o.max_joint_gap_m, o.max_penetration_m, o.dt_s);
+
+#[derive(Parser)]
+#[command(name = "uncoil", version, about = "A coiled tape uncoiling on a floor, contact-resolved in rapier2d and held against the continuum theory")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scene: simulate, compare with the references, write samples.csv and report.json.
+    Run {
+        /// The scene file (TOML), e.g. scenes/yoga-mat.toml.
+        scene: PathBuf,
+        /// Output folder (default: runs/<scene name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Run { scene, out } => {
+            let scene = match Scene::from_file(&scene) {
+                Ok(s) => s,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            match run_scene(&scene, out) {
+                Ok(text) => {
+                    print!("{text}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::from(1)
+                }
+            }
         }
-        if o.phase == Phase::Done || o.t_s > scene.stop.max_time_s { break; }
     }
-    println!("steps {n} wall {:?}", t0.elapsed());
+}
+
+fn run_scene(scene: &Scene, out: Option<PathBuf>) -> anyhow::Result<String> {
+    let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&scene.name));
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("cannot create output folder {}", dir.display()))?;
+    eprintln!("running {} into {} ...", scene.name, dir.display());
+    let mut csv = CsvObserver::new(&dir);
+    let mut report = ReportObserver::new(&dir);
+    let observers: &mut [&mut dyn Observer] = &mut [&mut csv, &mut report];
+    let report = run(scene, observers)?;
+    Ok(summary(&report, &dir))
 }

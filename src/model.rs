@@ -108,6 +108,10 @@ struct Link {
     far: [f64; 2],
     mass_kg: f64,
     length_m: f64,
+    /// Chord over arc length of the spiral between the nodes.
+    chord_ratio: f64,
+    /// How far the node line sits below the contact surface (m), see [`Model`].
+    inset_m: f64,
 }
 
 impl Link {
@@ -209,25 +213,26 @@ impl Model {
         let spiral = Spiral::wound(tape.outer_radius_m, b, tape.core_radius_m);
         let moments = SpiralMoments::new(spiral);
         let nodes = spiral.link_nodes(scene.links_per_turn);
-        let chords: Vec<([f64; 2], [f64; 2], f64)> = nodes
+        let mut links: Vec<Link> = nodes
             .windows(2)
             .map(|w| {
                 let (near, far) = (spiral.point(w[0]), spiral.point(w[1]));
-                let len = (near[0] - far[0]).hypot(near[1] - far[1]);
-                (near, far, len)
+                let length_m = (near[0] - far[0]).hypot(near[1] - far[1]);
+                let chord_ratio = length_m / spiral.arc(w[1], w[0]);
+                Link {
+                    near,
+                    far,
+                    mass_kg: 0.0,
+                    length_m,
+                    chord_ratio,
+                    inset_m: spiral.curvature_radius(w[0]) * (1.0 - chord_ratio),
+                }
             })
             .collect();
-        let total_len: f64 = chords.iter().map(|c| c.2).sum();
-        let lambda = tape.mass_kg / total_len;
-        let links: Vec<Link> = chords
-            .into_iter()
-            .map(|(near, far, length_m)| Link {
-                near,
-                far,
-                mass_kg: lambda * length_m,
-                length_m,
-            })
-            .collect();
+        let total_len: f64 = links.iter().map(|l| l.length_m).sum();
+        for link in &mut links {
+            link.mass_kg = tape.mass_kg * link.length_m / total_len;
+        }
 
         let mut world = PhysicsWorld::new();
         world.gravity = Vector::new(0.0, -scene.g_m_s2);
@@ -415,7 +420,7 @@ impl Model {
                 .clamp(self.spiral.psi_in, self.spiral.psi_out);
             while self.shedding
                 && self.first_attached + 1 < self.links.len()
-                && self.psi_low <= self.far_node_psi(self.first_attached)
+                && self.psi_low <= self.near_node_psi(self.first_attached)
             {
                 self.detach_outermost();
             }
@@ -433,6 +438,14 @@ impl Model {
         self.observe()
     }
 
+    fn near_node_psi(&self, k: usize) -> f64 {
+        if k == 0 {
+            self.spiral.psi_out
+        } else {
+            self.far_node_psi(k - 1)
+        }
+    }
+
     fn far_node_psi(&self, k: usize) -> f64 {
         // Nodes step inward by one link angle from the outer end.
         #[allow(clippy::cast_precision_loss)]
@@ -446,12 +459,7 @@ impl Model {
     }
 
     fn refit_ball(&mut self) {
-        self.chord_ratio = {
-            let k = self.first_attached.min(self.links.len() - 1);
-            let link = self.links[k];
-            let s = self.spiral.arc(self.far_node_psi(k), self.far_node_psi(k) + self.link_angle);
-            link.length_m / s
-        };
+        self.chord_ratio = self.links[self.first_attached.min(self.links.len() - 1)].chord_ratio;
         let (Some(handle), true) = (self.coil_ball, self.phase == Phase::Rolling) else {
             return;
         };
@@ -487,7 +495,10 @@ impl Model {
                 .can_sleep(false),
         );
         self.world.insert_collider(
-            ColliderBuilder::segment(Vector::new(-half, 0.0), Vector::new(half, 0.0))
+            ColliderBuilder::segment(
+                Vector::new(-half, -link.inset_m),
+                Vector::new(half, -link.inset_m),
+            )
                 .density(0.0)
                 .friction(self.friction)
                 .collision_groups(Self::tape_groups()),

@@ -204,6 +204,11 @@ impl Continuum {
         -((2.0 * k + b * b) * rd * rd + 3.0 * b * b * g * r) / ((k + b * b) * r)
     }
 
+    /// R: the outer radius (m).
+    pub fn outer_radius_m(&self) -> f64 {
+        self.p.outer_radius_m
+    }
+
     /// Total energy E of eq. (5), corrected per ERRATA A1 (J).
     pub fn energy_j(&self) -> f64 {
         self.energy_j
@@ -463,6 +468,33 @@ impl ExactGeometry {
     pub fn state_at_time(&self, t: f64) -> Option<RefState> {
         self.traj.q_at(t).map(|psi| self.state_at_psi(psi, t))
     }
+
+    /// The floor's normal force on the coil (N) that keeps it rolling with the lowest point
+    /// at `psi`: `N = m g + d(m y_cm')/dt` (the shed tape leaves at rest and carries no
+    /// momentum). The spiral's centre of mass sits about `b / pi` off its axis, so `N`
+    /// swings once per turn and falls below zero once `omega^2 b / pi > g`: from there a
+    /// rigid spiral on a floor that cannot pull hops, and this model no longer applies.
+    pub fn normal_force_n(&self, psi: f64) -> f64 {
+        let h = 1e-4;
+        // P(psi) = m y_cm' = m (dy_cm/dpsi) psi', with psi' = -|psi'|.
+        let momentum = |q: f64| {
+            let dy = (self.pose(q + h).y_cm - self.pose(q - h).y_cm) / (2.0 * h);
+            -self.pose(q).mass_kg * dy * self.psidot(q)
+        };
+        let dp_dpsi = (momentum(psi + h) - momentum(psi - h)) / (2.0 * h);
+        self.pose(psi).mass_kg * self.p.g_m_s2 - self.psidot(psi) * dp_dpsi
+    }
+
+    /// The first laid fraction at which the rolling spiral would need a floor that pulls
+    /// (`N < 0`), scanning the tabulated motion; `None` if it never does.
+    pub fn hop_onset_fraction(&self) -> Option<f64> {
+        let (start, end) = (self.spiral.psi_out, self.traj.q_end());
+        let n = 20_000;
+        (1..n).find_map(|k| {
+            let psi = start - (start - end) * f64::from(k) / f64::from(n);
+            (self.normal_force_n(psi) < 0.0).then(|| self.laid_fraction(psi))
+        })
+    }
 }
 
 #[cfg(test)]
@@ -644,5 +676,25 @@ mod tests {
             ahead > 0.03 && ahead < 0.12,
             "exact {te:.4} s, eq. 7 {tc:.4} s"
         );
+    }
+
+    #[test]
+    fn exact_geometry_normal_force_starts_at_the_weight_and_the_coil_hops_later() {
+        // At the start the coil barely accelerates vertically: N ~ M g. The centre of mass
+        // sits ~b/pi off the axis, so N < 0 once omega^2 b / pi > g, i.e. omega > 78 rad/s
+        // for the yoga mat.
+        let p = yoga(0.3);
+        let e = ExactGeometry::new(p, 0.005);
+        let n0 = e.normal_force_n(e.spiral().psi_out - 0.01);
+        assert!((n0 / (p.mass_kg * p.g_m_s2) - 1.0).abs() < 0.1, "N0 = {n0}");
+        let f = e.hop_onset_fraction().expect("the yoga mat hops");
+        let psi = e.psi_at_fraction(f);
+        let omega = e.state_at_psi(psi, 0.0).omega_rad_s;
+        let predicted = (PI * p.g_m_s2 / p.thickness_m).sqrt();
+        assert!(
+            (omega / predicted - 1.0).abs() < 0.25,
+            "hop at f = {f:.3}, omega = {omega:.1} rad/s, omega^2 b/pi = g gives {predicted:.1}"
+        );
+        println!("hop at f = {f:.3}, omega = {omega:.1} rad/s, predicted {predicted:.1}");
     }
 }

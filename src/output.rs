@@ -1,0 +1,304 @@
+//! Outputs of a run: `samples.csv` (written as the run goes), `report.json`, and the
+//! readable summary. Files are written under a temporary name and renamed when complete,
+//! so a killed run never leaves a file that looks finished. This module does no physics.
+
+use std::fmt::Write as _;
+use std::fs::{self, File};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+
+use crate::run::{Observer, RunReport, Sample};
+use crate::scene::Scene;
+
+/// Column names of `samples.csv`, in order.
+pub const CSV_COLUMNS: [&str; 29] = [
+    "t_s",
+    "laid_fraction",
+    "r_m",
+    "x_m",
+    "xdot_m_s",
+    "omega_rad_s",
+    "kinetic_j",
+    "potential_j",
+    "dissipated_j",
+    "normal_n",
+    "friction_n",
+    "lost_step_j",
+    "lost_detach_j",
+    "lost_freeze_j",
+    "lost_bang_j",
+    "r_ref_m",
+    "x_ref_m",
+    "xdot_ref_m_s",
+    "kinetic_ref_j",
+    "normal_ref_n",
+    "friction_ref_n",
+    "r_geo_m",
+    "x_geo_m",
+    "xdot_geo_m_s",
+    "kinetic_geo_j",
+    "r_ft_m",
+    "active_bodies",
+    "max_joint_gap_m",
+    "max_penetration_m",
+];
+
+fn sample_values(s: &Sample) -> [f64; 29] {
+    #[allow(clippy::cast_precision_loss)]
+    let bodies = s.active_bodies as f64;
+    [
+        s.t_s,
+        s.laid_fraction,
+        s.r_m,
+        s.x_m,
+        s.xdot_m_s,
+        s.omega_rad_s,
+        s.kinetic_j,
+        s.potential_j,
+        s.dissipated_j,
+        s.normal_n,
+        s.friction_n,
+        s.lost_step_j,
+        s.lost_detach_j,
+        s.lost_freeze_j,
+        s.lost_bang_j,
+        s.r_ref_m,
+        s.x_ref_m,
+        s.xdot_ref_m_s,
+        s.kinetic_ref_j,
+        s.normal_ref_n,
+        s.friction_ref_n,
+        s.r_geo_m,
+        s.x_geo_m,
+        s.xdot_geo_m_s,
+        s.kinetic_geo_j,
+        s.r_ft_m,
+        bodies,
+        s.max_joint_gap_m,
+        s.max_penetration_m,
+    ]
+}
+
+/// Writes `path` atomically: into `path.partial`, then renamed.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let tmp = partial_path(path);
+    fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
+    fs::rename(&tmp, path).with_context(|| format!("cannot rename to {}", path.display()))?;
+    Ok(())
+}
+
+fn partial_path(path: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".partial");
+    path.with_file_name(name)
+}
+
+/// Streams samples into `samples.csv`. A reference past its tabulated end (or a
+/// quantity that does not exist in a phase) is an empty cell, never `NaN`.
+pub struct CsvObserver {
+    path: PathBuf,
+    out: Option<BufWriter<File>>,
+}
+
+impl CsvObserver {
+    /// An observer writing `dir/samples.csv`.
+    pub fn new(dir: &Path) -> Self {
+        Self {
+            path: dir.join("samples.csv"),
+            out: None,
+        }
+    }
+}
+
+impl Observer for CsvObserver {
+    fn observe_init(&mut self, _scene: &Scene) -> anyhow::Result<()> {
+        let tmp = partial_path(&self.path);
+        let file =
+            File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
+        let mut out = BufWriter::new(file);
+        writeln!(out, "{}", CSV_COLUMNS.join(","))?;
+        self.out = Some(out);
+        Ok(())
+    }
+
+    fn observe_sample(&mut self, sample: &Sample) -> anyhow::Result<()> {
+        let Some(out) = self.out.as_mut() else {
+            return Ok(());
+        };
+        let mut line = String::with_capacity(400);
+        for (i, v) in sample_values(sample).iter().enumerate() {
+            if i > 0 {
+                line.push(',');
+            }
+            if v.is_finite() {
+                write!(line, "{v:.9e}")?;
+            }
+        }
+        writeln!(out, "{line}")?;
+        Ok(())
+    }
+
+    fn observe_final(&mut self, _report: &RunReport) -> anyhow::Result<()> {
+        if let Some(mut out) = self.out.take() {
+            out.flush()?;
+            drop(out);
+            fs::rename(partial_path(&self.path), &self.path)
+                .with_context(|| format!("cannot rename to {}", self.path.display()))?;
+        }
+        Ok(())
+    }
+}
+
+/// Writes `report.json` at the end of the run.
+pub struct ReportObserver {
+    path: PathBuf,
+}
+
+impl ReportObserver {
+    /// An observer writing `dir/report.json`.
+    pub fn new(dir: &Path) -> Self {
+        Self {
+            path: dir.join("report.json"),
+        }
+    }
+}
+
+impl Observer for ReportObserver {
+    fn observe_init(&mut self, _scene: &Scene) -> anyhow::Result<()> {
+        Ok(())
+    }
+    fn observe_sample(&mut self, _sample: &Sample) -> anyhow::Result<()> {
+        Ok(())
+    }
+    fn observe_final(&mut self, report: &RunReport) -> anyhow::Result<()> {
+        let mut text = serde_json::to_string_pretty(report)?;
+        text.push('\n');
+        write_atomic(&self.path, text.as_bytes())
+    }
+}
+
+fn pct(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{:+.2}%", 100.0 * v))
+}
+
+fn secs(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{v:.4}"))
+}
+
+/// The readable summary printed after a run.
+pub fn summary(report: &RunReport, out_dir: &Path) -> String {
+    let s = &report.scene;
+    let l = &report.ledger;
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
+        "uncoil: {} (R = {} m, b = {} m, M = {} kg, push {} m/s, friction {})",
+        s.name,
+        s.tape.outer_radius_m,
+        s.tape.thickness_m,
+        s.tape.mass_kg,
+        s.push_speed_m_s,
+        s.friction
+    );
+    let _ = writeln!(
+        o,
+        "  {} links ({} per turn), {} steps, {:.3} s simulated in {:.3} s wall; stopped: {}",
+        report.links,
+        s.links_per_turn,
+        report.steps,
+        report.sim_time_s,
+        report.wall_time_s,
+        report.stop_reason
+    );
+    let _ = writeln!(o);
+    let _ = writeln!(
+        o,
+        "Time to reach each radius (compared at equal laid mass fraction f = 1 - (r/R)^2):"
+    );
+    let _ = writeln!(
+        o,
+        "  {:<6} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "r", "f", "sim s", "exact s", "eq.7 s", "eq.17 s", "sim/ex", "sim/eq7", "ex/eq7"
+    );
+    for m in &report.milestones {
+        let _ = writeln!(
+            o,
+            "  {:<6} {:>7.4} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+            m.label,
+            m.laid_fraction,
+            secs(m.t_sim_s),
+            secs(m.t_geo_s),
+            secs(m.t_eq7_s),
+            secs(m.t_eq17_s),
+            pct(m.err_vs_geo),
+            pct(m.err_vs_eq7),
+            pct(m.geo_vs_eq7)
+        );
+    }
+    let _ = writeln!(
+        o,
+        "  sim/ex: the simulation's error against the exact-geometry model it converges to;"
+    );
+    let _ = writeln!(
+        o,
+        "  ex/eq7: the continuum model's own idealisation (O(b/r)); eq. 17 ignores gravity."
+    );
+    if let Some(f) = report.geo_hop_fraction {
+        let _ = writeln!(
+            o,
+            "  The exact-geometry model needs a floor that pulls (N < 0) from f = {f:.4} on."
+        );
+    }
+    let _ = writeln!(o);
+    let pc = |x: f64| 100.0 * x / l.e0_j;
+    let _ = writeln!(
+        o,
+        "Energy ledger (E0 = {:.4} J; MgR = {:.4} J; flat tape at rest keeps {:.4} J):",
+        l.e0_j, l.mgr_j, l.flat_potential_j
+    );
+    let b = &l.before_bang;
+    let _ = writeln!(
+        o,
+        "  lost before the bang   {:>9.5} J ({:>6.2}% of E0): steps {:.5}, detach {:.5}, freeze {:.5}",
+        l.lost_before_bang_j,
+        pc(l.lost_before_bang_j),
+        b.step_j,
+        b.detach_j,
+        b.freeze_j
+    );
+    let _ = writeln!(
+        o,
+        "  kinetic into the bang  {:>9.5} J ({:>6.2}% of E0){}",
+        l.kinetic_into_bang_j,
+        pc(l.kinetic_into_bang_j),
+        l.bang_time_s
+            .map_or_else(String::new, |t| format!(", at t = {t:.4} s"))
+    );
+    let _ = writeln!(
+        o,
+        "  dissipated by the bang {:>9.5} J ({:>6.2}% of E0)",
+        l.dissipated_by_bang_j,
+        pc(l.dissipated_by_bang_j)
+    );
+    let _ = writeln!(
+        o,
+        "  left at the end        {:>9.5} J ({:>6.2}% of E0, above the flat rest state)",
+        l.left_j,
+        pc(l.left_j)
+    );
+    let _ = writeln!(o);
+    let _ = writeln!(
+        o,
+        "Max joint separation {:.2e} m, max floor penetration {:.2e} m.",
+        report.max_joint_gap_m, report.max_penetration_m
+    );
+    let _ = writeln!(
+        o,
+        "Wrote {} and {}",
+        out_dir.join("samples.csv").display(),
+        out_dir.join("report.json").display()
+    );
+    o
+}

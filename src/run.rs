@@ -1,0 +1,400 @@
+//! The run loop: steps the contact-resolved model, puts the analytic references beside it,
+//! and feeds samples to observers; it builds the [`RunReport`]. It times only the model's
+//! step, and it never names a file format (outputs are [`Observer`]s).
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::model::{EnergyLedger, Model, Observation, Phase};
+use crate::reference::{Continuum, ExactGeometry, ForceTorque, Params};
+use crate::scene::Scene;
+
+/// One row of output: the simulation and its references at the same instant.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Sample {
+    /// Simulated time (s).
+    pub t_s: f64,
+    /// Mass on the floor over the total mass.
+    pub laid_fraction: f64,
+    /// Continuum-equivalent coil radius `R sqrt(1 - laid_fraction)` (m).
+    pub r_m: f64,
+    /// Contact-line position (m).
+    pub x_m: f64,
+    /// Contact-line speed (m/s), from the change of `x_m` over the last step.
+    pub xdot_m_s: f64,
+    /// Clockwise spin of the coil (rad/s).
+    pub omega_rad_s: f64,
+    /// Kinetic energy of everything that moves (J).
+    pub kinetic_j: f64,
+    /// Potential energy of the whole tape above the floor (J).
+    pub potential_j: f64,
+    /// Energy dissipated so far, `E0 - kinetic - potential` (J).
+    pub dissipated_j: f64,
+    /// Floor normal force on the moving tape (N).
+    pub normal_n: f64,
+    /// Floor horizontal force on the moving tape, +x positive (N).
+    pub friction_n: f64,
+    /// Loss inside engine steps while rolling (J).
+    pub lost_step_j: f64,
+    /// Loss at detach events (J).
+    pub lost_detach_j: f64,
+    /// Kinetic energy discarded by freezing laid links while rolling (J).
+    pub lost_freeze_j: f64,
+    /// Loss since the final bang began (J).
+    pub lost_bang_j: f64,
+    /// Eq. (7): coil radius at this time (m).
+    pub r_ref_m: f64,
+    /// Eq. (7): contact position (m).
+    pub x_ref_m: f64,
+    /// Eq. (7): contact-line speed (m/s).
+    pub xdot_ref_m_s: f64,
+    /// Eq. (7): kinetic energy (J).
+    pub kinetic_ref_j: f64,
+    /// Eq. (9), exact form (ERRATA A4): floor normal force on the coil (N).
+    pub normal_ref_n: f64,
+    /// Eq. (11): horizontal force on the coil (N).
+    pub friction_ref_n: f64,
+    /// Exact-geometry model: equivalent radius (m).
+    pub r_geo_m: f64,
+    /// Exact-geometry model: contact position (m).
+    pub x_geo_m: f64,
+    /// Exact-geometry model: contact-line speed (m/s).
+    pub xdot_geo_m_s: f64,
+    /// Exact-geometry model: kinetic energy (J).
+    pub kinetic_geo_j: f64,
+    /// Eq. (17): coil radius (m).
+    pub r_ft_m: f64,
+    /// Bodies in the engine.
+    pub active_bodies: usize,
+    /// Largest joint separation (m).
+    pub max_joint_gap_m: f64,
+    /// Deepest floor penetration (m).
+    pub max_penetration_m: f64,
+}
+
+/// One milestone: the coil at a given continuum-equivalent radius.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Milestone {
+    /// Label, e.g. `0.5R` or `2b`.
+    pub label: String,
+    /// Equivalent radius (m).
+    pub r_m: f64,
+    /// Laid fraction `1 - (r/R)^2`.
+    pub laid_fraction: f64,
+    /// Simulation time to reach it (s), `None` if the run never got there.
+    pub t_sim_s: Option<f64>,
+    /// Exact-geometry model's time (s).
+    pub t_geo_s: Option<f64>,
+    /// Eq. (7)'s time (s).
+    pub t_eq7_s: Option<f64>,
+    /// Eq. (17)'s time (s).
+    pub t_eq17_s: Option<f64>,
+    /// `t_sim / t_geo - 1`: the simulation's own error.
+    pub err_vs_geo: Option<f64>,
+    /// `t_sim / t_eq7 - 1`.
+    pub err_vs_eq7: Option<f64>,
+    /// `t_geo / t_eq7 - 1`: the continuum model's own idealisation.
+    pub geo_vs_eq7: Option<f64>,
+    /// Contact-line speed in the simulation (m/s).
+    pub xdot_sim_m_s: Option<f64>,
+    /// Eq. (7)'s contact-line speed (m/s).
+    pub xdot_eq7_m_s: Option<f64>,
+    /// Simulation kinetic energy (J).
+    pub kinetic_j: Option<f64>,
+    /// Simulation potential energy (J).
+    pub potential_j: Option<f64>,
+    /// Simulation energy dissipated so far (J).
+    pub dissipated_j: Option<f64>,
+}
+
+/// Where the energy went over the whole run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Ledger {
+    /// Initial energy, kinetic plus potential above the floor (J).
+    pub e0_j: f64,
+    /// `M g R`, the potential energy the paradox is about (J).
+    pub mgr_j: f64,
+    /// Potential energy of the tape lying flat, midline at `b/2` (J).
+    pub flat_potential_j: f64,
+    /// Energy lost before the final bang, by where it was lost.
+    pub before_bang: EnergyLedger,
+    /// Lost before the bang, in total (J).
+    pub lost_before_bang_j: f64,
+    /// Kinetic energy carried into the bang (J).
+    pub kinetic_into_bang_j: f64,
+    /// Mechanical energy above the flat rest state at the bang (J).
+    pub available_at_bang_j: f64,
+    /// Dissipated during the bang, as measured (J).
+    pub dissipated_by_bang_j: f64,
+    /// Left at the end: kinetic plus potential above the flat rest state (J).
+    pub left_j: f64,
+    /// Time the bang began (s).
+    pub bang_time_s: Option<f64>,
+}
+
+/// Everything a run produced, for JSON and the summary.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunReport {
+    /// The validated scene.
+    pub scene: Scene,
+    /// Links of the tape.
+    pub links: usize,
+    /// Engine steps taken.
+    pub steps: u64,
+    /// Wall time of the engine steps alone (s).
+    pub wall_time_s: f64,
+    /// Simulated time (s).
+    pub sim_time_s: f64,
+    /// Why the run stopped.
+    pub stop_reason: String,
+    /// Milestones at 0.75R, 0.5R, 0.25R, 0.1R and 2b.
+    pub milestones: Vec<Milestone>,
+    /// The energy ledger.
+    pub ledger: Ledger,
+    /// Laid fraction from which the exact-geometry model needs a floor that pulls.
+    pub geo_hop_fraction: Option<f64>,
+    /// Largest joint separation seen (m).
+    pub max_joint_gap_m: f64,
+    /// Deepest floor penetration seen (m).
+    pub max_penetration_m: f64,
+}
+
+/// An output fed by the run loop.
+pub trait Observer {
+    /// Called once before the first step.
+    fn observe_init(&mut self, scene: &Scene) -> anyhow::Result<()>;
+    /// Called for every sample.
+    fn observe_sample(&mut self, sample: &Sample) -> anyhow::Result<()>;
+    /// Called once with the final report.
+    fn observe_final(&mut self, report: &RunReport) -> anyhow::Result<()>;
+}
+
+/// The analytic references of a scene.
+pub struct References {
+    /// Eq. (7).
+    pub continuum: Continuum,
+    /// Eq. (17).
+    pub force_torque: ForceTorque,
+    /// The exact-geometry model.
+    pub exact: ExactGeometry,
+}
+
+impl References {
+    /// Builds and tabulates the references for a scene, down to half the bang radius.
+    pub fn new(scene: &Scene) -> Self {
+        let p = params(scene);
+        let r_end = 0.5 * scene.stop.bang_radius_m;
+        Self {
+            continuum: Continuum::new(p, r_end),
+            force_torque: ForceTorque::new(p),
+            exact: ExactGeometry::new(p, r_end),
+        }
+    }
+}
+
+/// The reference parameters of a scene.
+pub fn params(scene: &Scene) -> Params {
+    Params {
+        outer_radius_m: scene.tape.outer_radius_m,
+        thickness_m: scene.tape.thickness_m,
+        mass_kg: scene.tape.mass_kg,
+        core_radius_m: scene.tape.core_radius_m,
+        g_m_s2: scene.g_m_s2,
+        push_speed_m_s: scene.push_speed_m_s,
+    }
+}
+
+/// The milestone radii of a scene with their labels.
+pub fn milestone_radii(scene: &Scene) -> Vec<(String, f64)> {
+    let big_r = scene.tape.outer_radius_m;
+    let mut v: Vec<(String, f64)> = [0.75, 0.5, 0.25, 0.1]
+        .iter()
+        .map(|k| (format!("{k}R"), k * big_r))
+        .collect();
+    v.push(("2b".into(), 2.0 * scene.tape.thickness_m));
+    v
+}
+
+struct MilestoneHit {
+    t_s: f64,
+    xdot: f64,
+    kinetic: f64,
+    potential: f64,
+}
+
+/// Runs a scene to its end and returns the report; every sample goes to the observers.
+pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result<RunReport> {
+    let refs = References::new(scene);
+    let mut model = Model::new(scene);
+    for o in observers.iter_mut() {
+        o.observe_init(scene)?;
+    }
+    let (k0, p0) = model.energy();
+    let e0 = k0 + p0;
+    let radii = milestone_radii(scene);
+    let big_r = scene.tape.outer_radius_m;
+    let fractions: Vec<f64> = radii.iter().map(|(_, r)| 1.0 - (r / big_r).powi(2)).collect();
+    let mut hits: Vec<Option<MilestoneHit>> = radii.iter().map(|_| None).collect();
+
+    let mut wall = 0.0;
+    let mut steps = 0u64;
+    let mut prev: Option<Observation> = None;
+    let mut xdot = scene.push_speed_m_s;
+    let mut next_sample = 0.0;
+    let mut bang: Option<(f64, Observation)> = None;
+    let mut max_gap: f64 = 0.0;
+    let mut max_pen: f64 = 0.0;
+    let stop_reason;
+    loop {
+        let start = Instant::now();
+        let obs = model.step();
+        wall += start.elapsed().as_secs_f64();
+        steps += 1;
+        max_gap = max_gap.max(obs.max_joint_gap_m);
+        max_pen = max_pen.max(obs.max_penetration_m);
+        if let Some(p) = prev {
+            if obs.phase == Phase::Rolling && obs.dt_s > 0.0 {
+                xdot = (obs.x_m - p.x_m) / obs.dt_s;
+            }
+            for (k, &f) in fractions.iter().enumerate() {
+                if hits[k].is_none() && p.laid_fraction < f && obs.laid_fraction >= f {
+                    let s = (f - p.laid_fraction) / (obs.laid_fraction - p.laid_fraction);
+                    hits[k] = Some(MilestoneHit {
+                        t_s: p.t_s + s * (obs.t_s - p.t_s),
+                        xdot,
+                        kinetic: obs.kinetic_j,
+                        potential: obs.potential_j,
+                    });
+                }
+            }
+            if p.phase == Phase::Rolling && obs.phase != Phase::Rolling {
+                bang = Some((p.t_s, p));
+            }
+        }
+        let done = obs.phase == Phase::Done;
+        let timed_out = obs.t_s >= scene.stop.max_time_s;
+        if obs.t_s >= next_sample || done || timed_out {
+            let sample = make_sample(&obs, xdot, e0, &refs);
+            for o in observers.iter_mut() {
+                o.observe_sample(&sample)?;
+            }
+            next_sample = obs.t_s + scene.sample_interval_s;
+        }
+        prev = Some(obs);
+        if done {
+            stop_reason = "the final bang settled (stop.settle_time_s)".to_string();
+            break;
+        }
+        if timed_out {
+            stop_reason = format!("stop.max_time_s = {} reached", scene.stop.max_time_s);
+            break;
+        }
+    }
+    let last = prev.expect("at least one step");
+    let flat = model.flat_potential_j();
+    let (bang_time, before, kinetic_into, available) = match bang {
+        Some((t, o)) => (
+            Some(t),
+            o.ledger,
+            o.kinetic_j,
+            o.kinetic_j + o.potential_j - flat,
+        ),
+        None => (None, last.ledger, last.kinetic_j, last.kinetic_j + last.potential_j - flat),
+    };
+    let ledger = Ledger {
+        e0_j: e0,
+        mgr_j: scene.tape.mass_kg * scene.g_m_s2 * big_r,
+        flat_potential_j: flat,
+        before_bang: before,
+        lost_before_bang_j: before.total_j(),
+        kinetic_into_bang_j: kinetic_into,
+        available_at_bang_j: available,
+        dissipated_by_bang_j: last.ledger.bang_j,
+        left_j: last.kinetic_j + last.potential_j - flat,
+        bang_time_s: bang_time,
+    };
+    let milestones = radii
+        .iter()
+        .zip(fractions.iter())
+        .zip(hits.iter())
+        .map(|(((label, r), &f), hit)| {
+            let t_geo = refs.exact.time_at_fraction(f);
+            let t_eq7 = refs.continuum.time_at_radius(*r);
+            let t_sim = hit.as_ref().map(|h| h.t_s);
+            let rel = |a: Option<f64>, b: Option<f64>| a.zip(b).map(|(a, b)| a / b - 1.0);
+            Milestone {
+                label: label.clone(),
+                r_m: *r,
+                laid_fraction: f,
+                t_sim_s: t_sim,
+                t_geo_s: t_geo,
+                t_eq7_s: t_eq7,
+                t_eq17_s: Some(refs.force_torque.time_at_radius(*r)),
+                err_vs_geo: rel(t_sim, t_geo),
+                err_vs_eq7: rel(t_sim, t_eq7),
+                geo_vs_eq7: rel(t_geo, t_eq7),
+                xdot_sim_m_s: hit.as_ref().map(|h| h.xdot),
+                xdot_eq7_m_s: t_eq7.map(|_| refs.continuum.state_at_radius(*r, 0.0).xdot_m_s),
+                kinetic_j: hit.as_ref().map(|h| h.kinetic),
+                potential_j: hit.as_ref().map(|h| h.potential),
+                dissipated_j: hit.as_ref().map(|h| e0 - h.kinetic - h.potential),
+            }
+        })
+        .collect();
+    let report = RunReport {
+        scene: scene.clone(),
+        links: model.link_count(),
+        steps,
+        wall_time_s: wall,
+        sim_time_s: last.t_s,
+        stop_reason,
+        milestones,
+        ledger,
+        geo_hop_fraction: refs.exact.hop_onset_fraction(),
+        max_joint_gap_m: max_gap,
+        max_penetration_m: max_pen,
+    };
+    for o in observers.iter_mut() {
+        o.observe_final(&report)?;
+    }
+    Ok(report)
+}
+
+fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &References) -> Sample {
+    let nan = f64::NAN;
+    let c = refs.continuum.state_at_time(obs.t_s);
+    let g = refs.exact.state_at_time(obs.t_s);
+    let r_ref = c.map_or(nan, |s| s.r_m);
+    Sample {
+        t_s: obs.t_s,
+        laid_fraction: obs.laid_fraction,
+        r_m: (1.0 - obs.laid_fraction).max(0.0).sqrt() * refs.continuum.outer_radius_m(),
+        x_m: obs.x_m,
+        xdot_m_s: xdot,
+        omega_rad_s: obs.omega_rad_s,
+        kinetic_j: obs.kinetic_j,
+        potential_j: obs.potential_j,
+        dissipated_j: e0 - obs.kinetic_j - obs.potential_j,
+        normal_n: obs.normal_n,
+        friction_n: obs.friction_n,
+        lost_step_j: obs.ledger.step_j,
+        lost_detach_j: obs.ledger.detach_j,
+        lost_freeze_j: obs.ledger.freeze_j,
+        lost_bang_j: obs.ledger.bang_j,
+        r_ref_m: r_ref,
+        x_ref_m: c.map_or(nan, |s| s.x_m),
+        xdot_ref_m_s: c.map_or(nan, |s| s.xdot_m_s),
+        kinetic_ref_j: c.map_or(nan, |s| s.kinetic_j),
+        normal_ref_n: c.map_or(nan, |s| refs.continuum.normal_force_n(s.r_m)),
+        friction_ref_n: c.map_or(nan, |s| refs.continuum.horizontal_force_n(s.r_m)),
+        r_geo_m: g.map_or(nan, |s| s.r_m),
+        x_geo_m: g.map_or(nan, |s| s.x_m),
+        xdot_geo_m_s: g.map_or(nan, |s| s.xdot_m_s),
+        kinetic_geo_j: g.map_or(nan, |s| s.kinetic_j),
+        r_ft_m: refs.force_torque.radius_at_time(obs.t_s).unwrap_or(nan),
+        active_bodies: obs.active_bodies,
+        max_joint_gap_m: obs.max_joint_gap_m,
+        max_penetration_m: obs.max_penetration_m,
+    }
+}
