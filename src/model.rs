@@ -241,6 +241,9 @@ impl Model {
         // Tolerances scale with the tape: allowed penetration and prediction are fractions
         // of `length_unit`, so a 0.1 mm tape gets micrometre-sized slop, not millimetres.
         ip.length_unit = b;
+        // The engine clamps speeds at `normalized_max_linear_velocity * length_unit` (2 m/s
+        // for a 5 mm tape): the end of an unroll is far faster than that, so lift the cap.
+        ip.normalized_max_linear_velocity = Real::MAX;
         ip.dt = scene.solver.max_dt_s;
 
         let ground = world.insert_body(RigidBodyBuilder::fixed());
@@ -494,18 +497,27 @@ impl Model {
                 .angvel(angvel)
                 .can_sleep(false),
         );
+        self.world.bodies[handle].recompute_mass_properties_from_colliders(&self.world.colliders);
+        handle
+    }
+
+    /// Gives a laid link its floor contact. A link hanging from the coil needs none: its
+    /// near node rests on the previous link and its far node is carried by the coil, which
+    /// stands on its own curved contact; a collider there would touch the floor just before
+    /// the node arrives, a corner impact on every link.
+    fn lay_link(&mut self, k: usize, handle: RigidBodyHandle) {
+        let link = self.links[k];
+        let half = 0.5 * link.length_m;
         self.world.insert_collider(
             ColliderBuilder::segment(
                 Vector::new(-half, -link.inset_m),
                 Vector::new(half, -link.inset_m),
             )
-                .density(0.0)
-                .friction(self.friction)
-                .collision_groups(Self::tape_groups()),
+            .density(0.0)
+            .friction(self.friction)
+            .collision_groups(Self::tape_groups()),
             Some(handle),
         );
-        self.world.bodies[handle].recompute_mass_properties_from_colliders(&self.world.colliders);
-        handle
     }
 
     /// Joins the near node of link `k` (body `body`) to whatever holds it: the previous free
@@ -536,6 +548,9 @@ impl Model {
         let Some(coil) = self.coil else { return };
         let before = self.total_energy();
         let k = self.first_attached;
+        if let Some(prev) = self.free.back().copied() {
+            self.lay_link(prev.index, prev.body);
+        }
         let handle = self.spawn_link(k, coil);
         // The previous free link was pinned to the coil at this link's near node.
         if let Some(prev) = self.free.back().copied() {
@@ -595,6 +610,11 @@ impl Model {
             }
             self.join_near_node(k, handle);
             self.free.push_back(FreeLink { index: k, body: handle });
+        }
+        for link in self.free.clone() {
+            if self.world.bodies[link.body].colliders().is_empty() {
+                self.lay_link(link.index, link.body);
+            }
         }
         self.world.remove_body(coil);
         self.coil = None;
