@@ -238,11 +238,11 @@ impl Model {
         world.gravity = Vector::new(0.0, -scene.g_m_s2);
         let ip = &mut world.integration_parameters;
         ip.num_solver_iterations = scene.solver.iterations as usize;
-        // Tolerances scale with the tape: allowed penetration and prediction are fractions
-        // of `length_unit`, so a 0.1 mm tape gets micrometre-sized slop, not millimetres.
-        ip.length_unit = b;
-        // The engine clamps speeds at `normalized_max_linear_velocity * length_unit` (2 m/s
-        // for a 5 mm tape): the end of an unroll is far faster than that, so lift the cap.
+        // The engine's tolerances (contact prediction, corrective speed) are fractions of
+        // `length_unit`: the coil's size sets the scale of what moves.
+        ip.length_unit = 0.1 * tape.outer_radius_m;
+        // The engine clamps speeds at `normalized_max_linear_velocity * length_unit` (2.4 m/s
+        // for the yoga mat): the end of an unroll is far faster than that, so lift the cap.
         ip.normalized_max_linear_velocity = Real::MAX;
         ip.dt = scene.solver.max_dt_s;
 
@@ -484,7 +484,6 @@ impl Model {
         let centre = pose.transform_point(Vector::new(c[0], c[1]));
         let r = centre - com;
         let v = linvel + Vector::new(-angvel * r.y, angvel * r.x);
-        let half = 0.5 * link.length_m;
         let handle = self.world.insert_body(
             RigidBodyBuilder::dynamic()
                 .pose(Pose::new(centre, self.coil_angle + link.angle()))
@@ -644,13 +643,18 @@ impl Model {
             }
             let kinetic = body.kinetic_energy();
             self.frozen_potential_j += body.mass() * self.g * body.center_of_mass().y;
-            let far_node = pose.transform_point(Vector::new(-half, 0.0));
             self.world.remove_body(oldest.body);
             self.free.pop_front();
             if let Some(next) = self.free.front().copied() {
                 let next_half = 0.5 * self.links[next.index].length_m;
+                // Pin the next link where its near node is now, not where the frozen link's
+                // far node was: a joint stretched by tension would otherwise hand its
+                // stretch to the anchor at every freeze, and the laid tape would creep.
+                let node = self.world.bodies[next.body]
+                    .position()
+                    .transform_point(Vector::new(next_half, 0.0));
                 let joint = RevoluteJointBuilder::new()
-                    .local_anchor1(far_node)
+                    .local_anchor1(node)
                     .local_anchor2(Vector::new(next_half, 0.0))
                     .contacts_enabled(false);
                 self.world

@@ -1,0 +1,260 @@
+//! The `uncoil` binary on bad input: pins the error text on stderr, the exit code (2 for a
+//! bad scene, 1 for a run-time failure), an empty stdout, and that no output is written.
+
+use std::path::Path;
+
+use assert_cmd::Command;
+use predicates::prelude::*;
+
+/// The base scene (the yoga mat); each case edits it.
+const BASE: &str = r#"name = "case"
+[tape]
+outer_radius_m = 0.06
+thickness_m = 0.005
+mass_kg = 1.5
+[push]
+contact_speed_m_s = 0.3
+"#;
+
+/// How a case changes [`BASE`].
+#[derive(Clone, Copy)]
+enum Edit {
+    /// Replace the exact line `.0` (which must occur in `BASE`) with `.1` (may be several
+    /// lines, or empty to delete the line).
+    Replace(&'static str, &'static str),
+    /// Append these lines (e.g. a new section) to the end of the file.
+    Append(&'static str),
+}
+
+impl Edit {
+    fn apply(self, case: &str) -> String {
+        match self {
+            Edit::Replace(from, to) => {
+                let from_line = format!("{from}\n");
+                assert!(
+                    BASE.contains(&from_line),
+                    "case {case}: `{from}` is not a line of BASE"
+                );
+                let to_line = if to.is_empty() {
+                    String::new()
+                } else {
+                    format!("{to}\n")
+                };
+                BASE.replacen(&from_line, &to_line, 1)
+            }
+            Edit::Append(text) => format!("{BASE}{text}\n"),
+        }
+    }
+}
+
+/// Bad scenes: (case name, edit of [`BASE`], substrings stderr must contain). Each must exit
+/// with code 2 before any output is written. The scene file is always `case.toml`, so a
+/// parse error names the scene `case`.
+const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
+    (
+        "unknown key in [tape]",
+        Edit::Replace("mass_kg = 1.5", "mass_kg = 1.5\ncolour = 1"),
+        &[
+            "cannot parse scene case: ",
+            "line 6, column 1",
+            "unknown field `colour`",
+            "expected one of `outer_radius_m`, `thickness_m`, `mass_kg`, `core_radius_m`",
+        ],
+    ),
+    (
+        "wrong type",
+        Edit::Replace("mass_kg = 1.5", "mass_kg = \"heavy\""),
+        &[
+            "cannot parse scene case: ",
+            "line 5, column 11",
+            "mass_kg = \"heavy\"",
+            "invalid type: string \"heavy\", expected f64",
+        ],
+    ),
+    (
+        "missing required key",
+        Edit::Replace("mass_kg = 1.5", ""),
+        &["cannot parse scene case: ", "missing field `mass_kg`"],
+    ),
+    (
+        "negative thickness",
+        Edit::Replace("thickness_m = 0.005", "thickness_m = -0.005"),
+        &[
+            "tape.thickness_m = -0.005: ",
+            "must be > 0 and < tape.outer_radius_m / 2 (= 0.03): at least one full turn",
+        ],
+    ),
+    (
+        "zero mass",
+        Edit::Replace("mass_kg = 1.5", "mass_kg = 0.0"),
+        &["tape.mass_kg = 0: must be > 0"],
+    ),
+    (
+        "NaN outer radius",
+        Edit::Replace("outer_radius_m = 0.06", "outer_radius_m = nan"),
+        &["tape.outer_radius_m = NaN: must be finite"],
+    ),
+    (
+        "thickness of half the radius",
+        Edit::Replace("thickness_m = 0.005", "thickness_m = 0.03"),
+        &[
+            "tape.thickness_m = 0.03: ",
+            "must be > 0 and < tape.outer_radius_m / 2",
+            "at least one full turn",
+        ],
+    ),
+    (
+        "core leaving fewer than two turns",
+        Edit::Replace("mass_kg = 1.5", "mass_kg = 1.5\ncore_radius_m = 0.055"),
+        &[
+            "tape.core_radius_m = 0.055: ",
+            "must be >= 0 and <= tape.outer_radius_m - 2 * tape.thickness_m",
+            "must leave at least two turns of tape",
+        ],
+    ),
+    (
+        "two links per turn",
+        Edit::Append("[discretisation]\nlinks_per_turn = 2"),
+        &["discretisation.links_per_turn = 2: must be >= 3 and <= 4096"],
+    ),
+    (
+        "negative friction",
+        Edit::Append("[floor]\nfriction = -0.5"),
+        &["floor.friction = -0.5: must be >= 0"],
+    ),
+    (
+        "zero solver iterations",
+        Edit::Append("[solver]\niterations = 0"),
+        &["solver.iterations = 0: must be >= 1 and <= 1000"],
+    ),
+    (
+        "zero push",
+        Edit::Replace("contact_speed_m_s = 0.3", "contact_speed_m_s = 0.0"),
+        &[
+            "push.contact_speed_m_s = 0: ",
+            "must be > 0: a coil at rest on a level floor stays at rest",
+        ],
+    ),
+    (
+        "huge push",
+        Edit::Replace("contact_speed_m_s = 0.3", "contact_speed_m_s = 1e9"),
+        &["push.contact_speed_m_s = 1000000000: must be > 0 and <= 1000"],
+    ),
+];
+
+/// `uncoil run <scene> --out <out>`, returning (exit code, stdout, stderr).
+fn run(scene: &Path, out: &Path) -> (Option<i32>, String, String) {
+    let output = Command::cargo_bin("uncoil")
+        .unwrap()
+        .arg("run")
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap();
+    (
+        output.status.code(),
+        String::from_utf8_lossy(&output.stdout).into_owned(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn bad_scenes_exit_2_with_message_and_no_output() {
+    let mut failures = Vec::new();
+    for &(case, edit, expected) in BAD_SCENES {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = dir.path().join("case.toml");
+        let out = dir.path().join("out");
+        std::fs::write(&scene, edit.apply(case)).unwrap();
+        let (code, stdout, stderr) = run(&scene, &out);
+
+        let mut problems = Vec::new();
+        if code != Some(2) {
+            problems.push(format!("exit code {code:?}, expected Some(2)"));
+        }
+        if !stderr.starts_with("error: ") {
+            problems.push("stderr does not start with `error: `".to_owned());
+        }
+        for want in expected.iter() {
+            if !stderr.contains(want) {
+                problems.push(format!("stderr lacks `{want}`"));
+            }
+        }
+        if !stdout.is_empty() {
+            problems.push(format!("stdout is not empty: {stdout:?}"));
+        }
+        if out.exists() {
+            problems.push(format!("output folder {} was created", out.display()));
+        }
+        if !problems.is_empty() {
+            failures.push(format!(
+                "case `{case}`:\n  - {}\n  stderr:\n{stderr}",
+                problems.join("\n  - ")
+            ));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} bad-scene cases failed:\n\n{}",
+        failures.len(),
+        BAD_SCENES.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn missing_scene_file_exits_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("does-not-exist.toml");
+    let out = dir.path().join("out");
+    Command::cargo_bin("uncoil")
+        .unwrap()
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(2)
+        .stdout(predicate::str::is_empty())
+        .stderr(predicate::str::starts_with(
+            "error: cannot read scene file ",
+        ))
+        .stderr(predicate::str::contains(scene.display().to_string()));
+    assert!(!out.exists(), "output folder {} was created", out.display());
+}
+
+#[test]
+fn uncreatable_output_folder_exits_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("case.toml");
+    std::fs::write(&scene, BASE).unwrap();
+    let blocker = dir.path().join("blocker");
+    std::fs::write(&blocker, "a regular file, not a folder").unwrap();
+    let out = blocker.join("sub");
+    Command::cargo_bin("uncoil")
+        .unwrap()
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(1)
+        .stdout(predicate::str::is_empty())
+        .stderr(predicate::str::starts_with(
+            "error: cannot create output folder ",
+        ))
+        .stderr(predicate::str::contains(out.display().to_string()));
+    assert!(blocker.is_file(), "the blocking file was replaced");
+}
+
+#[test]
+fn help_exits_0_and_lists_run() {
+    Command::cargo_bin("uncoil")
+        .unwrap()
+        .arg("--help")
+        .assert()
+        .success()
+        .stdout(predicate::str::contains("run"))
+        .stdout(predicate::str::contains("Usage: uncoil"));
+}
