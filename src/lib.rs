@@ -3,7 +3,7 @@
 //! Surface", with the corrections listed in ERRATA.md).
 //!
 //! The pipeline: [`scene`] (TOML -> validated `Scene`) -> [`model`] (rapier) and
-//! [`reference`] (pure `f64`) -> [`run`] (loop, samples, report) -> [`output`] (files and
+//! [`reference`](mod@reference) (pure `f64`) -> [`run`] (loop, samples, report) -> [`output`] (files and
 //! the summary).
 
 pub mod model;

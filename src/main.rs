@@ -14,7 +14,11 @@ use uncoil::run::{Observer, run};
 use uncoil::scene::Scene;
 
 #[derive(Parser)]
-#[command(name = "uncoil", version, about = "A coiled tape uncoiling on a floor, contact-resolved in rapier2d and held against the continuum theory")]
+#[command(
+    name = "uncoil",
+    version,
+    about = "A coiled tape uncoiling on a floor, contact-resolved in rapier2d and held against the continuum theory"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

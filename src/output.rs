@@ -268,6 +268,19 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
         b.detach_j,
         b.freeze_j
     );
+    if let Some(d) = report
+        .milestones
+        .iter()
+        .find(|m| m.label == "2b")
+        .and_then(|m| m.dissipated_j)
+    {
+        let _ = writeln!(
+            o,
+            "  lost before r = 2b     {:>9.5} J ({:>6.2}% of E0)",
+            d,
+            pc(d)
+        );
+    }
     let _ = writeln!(
         o,
         "  kinetic into the bang  {:>9.5} J ({:>6.2}% of E0){}",

@@ -234,7 +234,10 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
     let e0 = k0 + p0;
     let radii = milestone_radii(scene);
     let big_r = scene.tape.outer_radius_m;
-    let fractions: Vec<f64> = radii.iter().map(|(_, r)| 1.0 - (r / big_r).powi(2)).collect();
+    let fractions: Vec<f64> = radii
+        .iter()
+        .map(|(_, r)| 1.0 - (r / big_r).powi(2))
+        .collect();
     let mut hits: Vec<Option<MilestoneHit>> = radii.iter().map(|_| None).collect();
 
     let mut wall = 0.0;
@@ -300,7 +303,12 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
             o.kinetic_j,
             o.kinetic_j + o.potential_j - flat,
         ),
-        None => (None, last.ledger, last.kinetic_j, last.kinetic_j + last.potential_j - flat),
+        None => (
+            None,
+            last.ledger,
+            last.kinetic_j,
+            last.kinetic_j + last.potential_j - flat,
+        ),
     };
     let ledger = Ledger {
         e0_j: e0,

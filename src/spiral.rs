@@ -110,7 +110,7 @@ impl Spiral {
     pub fn curvature_centre(&self, psi: f64) -> [f64; 2] {
         let p = self.point(psi);
         let t = self.tangent(psi);
-        let n = (t[0] * t[0] + t[1] * t[1]).sqrt();
+        let n = t[0].hypot(t[1]);
         // The spiral turns clockwise: the centre of curvature lies to the right of the tangent.
         let rc = self.curvature_radius(psi);
         [p[0] + rc * t[1] / n, p[1] - rc * t[0] / n]
@@ -279,7 +279,7 @@ mod tests {
             let lo = s.psi_in + h * f64::from(k);
             sum += gauss5(lo, lo + h, |p| {
                 let t = s.tangent(p);
-                (t[0] * t[0] + t[1] * t[1]).sqrt()
+                t[0].hypot(t[1])
             });
         }
         assert_relative_eq!(sum, s.length(), max_relative = 1e-12);

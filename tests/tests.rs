@@ -1,2 +1,4 @@
-//! Integration tests.
+//! Integration tests: one binary, so the engine links once.
+
 mod cli;
+mod sim;
