@@ -204,12 +204,13 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
     );
     let _ = writeln!(
         o,
-        "  {} links ({} per turn), {} steps, {:.3} s simulated in {:.3} s wall; stopped: {}",
+        "  {} links ({} per turn), {} steps, {:.3} s simulated in {:.3} s wall ({:.3} s to the bang); stopped: {}",
         report.links,
         s.links_per_turn,
         report.steps,
         report.sim_time_s,
         report.wall_time_s,
+        report.wall_time_rolling_s,
         report.stop_reason
     );
     let _ = writeln!(o);

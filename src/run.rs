@@ -144,6 +144,8 @@ pub struct RunReport {
     pub steps: u64,
     /// Wall time of the engine steps alone (s).
     pub wall_time_s: f64,
+    /// Wall time of the steps of the rolling phase, the unroll up to the bang (s).
+    pub wall_time_rolling_s: f64,
     /// Simulated time (s).
     pub sim_time_s: f64,
     /// Why the run stopped.
@@ -246,6 +248,7 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
     let mut xdot = scene.push_speed_m_s;
     let mut next_sample = 0.0;
     let mut bang: Option<(f64, Observation)> = None;
+    let mut wall_rolling = None;
     let mut max_gap: f64 = 0.0;
     let mut max_pen: f64 = 0.0;
     let stop_reason;
@@ -273,6 +276,7 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
             }
             if p.phase == Phase::Rolling && obs.phase != Phase::Rolling {
                 bang = Some((p.t_s, p));
+                wall_rolling = Some(wall);
             }
         }
         let done = obs.phase == Phase::Done;
@@ -355,6 +359,7 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
         links: model.link_count(),
         steps,
         wall_time_s: wall,
+        wall_time_rolling_s: wall_rolling.unwrap_or(wall),
         sim_time_s: last.t_s,
         stop_reason,
         milestones,
