@@ -231,6 +231,8 @@ pub struct Model {
     x_low: f64,
     chord_ratio: f64,
     shedding: bool,
+    /// Kinetic plus potential energy at the last observation, the next step's start (J).
+    energy_j: f64,
 }
 
 impl Model {
@@ -319,7 +321,7 @@ impl Model {
         world.bodies[coil].recompute_mass_properties_from_colliders(&world.colliders);
 
         let bang_r = scene.stop.bang_radius_m;
-        Self {
+        let mut model = Self {
             world,
             spiral,
             moments,
@@ -352,7 +354,10 @@ impl Model {
             x_low: 0.0,
             chord_ratio: 1.0,
             shedding: true,
-        }
+            energy_j: 0.0,
+        };
+        model.energy_j = model.total_energy();
+        model
     }
 
     fn tape_groups() -> InteractionGroups {
@@ -383,11 +388,6 @@ impl Model {
     /// Number of links of the tape.
     pub fn link_count(&self) -> usize {
         self.links.len()
-    }
-
-    /// The spiral the coil was wound on.
-    pub fn spiral(&self) -> &Spiral {
-        &self.spiral
     }
 
     /// Kinetic and potential energy of the whole tape (J).
@@ -430,7 +430,7 @@ impl Model {
     pub fn step(&mut self) -> Observation {
         let dt = self.next_dt();
         self.world.integration_parameters.dt = dt;
-        let before = self.total_energy();
+        let before = self.energy_j;
         self.world.step();
         self.t += dt;
         self.last_dt = dt;
@@ -735,6 +735,7 @@ impl Model {
     /// The state after the last step.
     pub fn observe(&mut self) -> Observation {
         let (kinetic_j, potential_j) = self.energy();
+        self.energy_j = kinetic_j + potential_j;
         let (normal_n, friction_n) = self.floor_forces();
         let (x_m, omega) = match self.coil {
             Some(coil) => {
@@ -766,11 +767,6 @@ impl Model {
             max_penetration_m: self.max_penetration(),
             dt_s: self.last_dt,
         }
-    }
-
-    /// Total tape mass (kg).
-    pub fn total_mass(&self) -> f64 {
-        self.total_mass
     }
 
     /// Potential energy of the tape lying flat, midline at `b/2` (J).

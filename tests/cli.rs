@@ -142,16 +142,16 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
     ),
 ];
 
+/// The command `uncoil run <scene> --out <out>`.
+fn run_command(scene: &Path, out: &Path) -> Command {
+    let mut cmd = Command::cargo_bin("uncoil").unwrap();
+    cmd.arg("run").arg(scene).arg("--out").arg(out);
+    cmd
+}
+
 /// `uncoil run <scene> --out <out>`, returning (exit code, stdout, stderr).
 fn run(scene: &Path, out: &Path) -> (Option<i32>, String, String) {
-    let output = Command::cargo_bin("uncoil")
-        .unwrap()
-        .arg("run")
-        .arg(scene)
-        .arg("--out")
-        .arg(out)
-        .output()
-        .unwrap();
+    let output = run_command(scene, out).output().unwrap();
     (
         output.status.code(),
         String::from_utf8_lossy(&output.stdout).into_owned(),
@@ -208,12 +208,7 @@ fn missing_scene_file_exits_2() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("does-not-exist.toml");
     let out = dir.path().join("out");
-    Command::cargo_bin("uncoil")
-        .unwrap()
-        .arg("run")
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
+    run_command(&scene, &out)
         .assert()
         .code(2)
         .stdout(predicate::str::is_empty())
@@ -232,12 +227,7 @@ fn uncreatable_output_folder_exits_1() {
     let blocker = dir.path().join("blocker");
     std::fs::write(&blocker, "a regular file, not a folder").unwrap();
     let out = blocker.join("sub");
-    Command::cargo_bin("uncoil")
-        .unwrap()
-        .arg("run")
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
+    run_command(&scene, &out)
         .assert()
         .code(1)
         .stdout(predicate::str::is_empty())
