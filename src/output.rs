@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 
+use crate::guard::Status;
 use crate::run::{Observer, RunReport, Sample};
 use crate::scene::Scene;
 
@@ -204,13 +205,17 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
     );
     let _ = writeln!(
         o,
-        "  {} links ({} per turn), {} steps, {:.3} s simulated in {:.3} s wall ({:.3} s to the bang); stopped: {}",
+        "  {} links ({} per turn), {} steps, {:.3} s simulated in {:.3} s wall ({:.3} s to the bang); {}: {}",
         report.links,
         s.links_per_turn,
         report.steps,
         report.sim_time_s,
         report.wall_time_s,
         report.wall_time_rolling_s,
+        match report.status {
+            Status::Completed => "completed",
+            Status::Stopped => "STOPPED by a guard",
+        },
         report.stop_reason
     );
     let _ = writeln!(o);
@@ -305,9 +310,32 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
     let _ = writeln!(o);
     let _ = writeln!(
         o,
-        "Max joint separation {:.2e} m, max floor penetration {:.2e} m.",
-        report.max_joint_gap_m, report.max_penetration_m
+        "Max joint separation {:.2e} m (bound {:.2e}), max floor penetration {:.2e} m (bound {:.2e}).",
+        report.max_joint_gap_m,
+        report.bounds.joint_gap_m,
+        report.max_penetration_m,
+        report.bounds.penetration_m
     );
+    let _ = writeln!(
+        o,
+        "Max energy rise above E0 {:+.2e} of E0 (bound {:.0e}); fastest spin {:.4e} rad/s.",
+        report.max_energy_rise_rel,
+        crate::guard::ENERGY_RISE_TOLERANCE,
+        report.max_spin_rad_s
+    );
+    if !report.reference_limits.is_empty() {
+        let _ = writeln!(o, "Where the references stop applying:");
+        for l in &report.reference_limits {
+            let _ = writeln!(
+                o,
+                "  {:<10} t = {:>9} s, r = {:.4e} m: {}",
+                crate::guard::label(l.kind),
+                secs(l.t_s),
+                l.r_m,
+                l.detail
+            );
+        }
+    }
     let _ = writeln!(
         o,
         "Wrote {} and {}",
