@@ -382,3 +382,170 @@ pub fn label(kind: LimitKind) -> &'static str {
         LimitKind::ExactModelHops => "exact hops",
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::EnergyLedger;
+
+    /// The yoga mat: R = 0.06 m, b = 0.005 m.
+    fn yoga() -> Scene {
+        Scene::from_toml_str(
+            "[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\nmass_kg = 1.5\n\
+             [push]\ncontact_speed_m_s = 0.3\n",
+            "yoga",
+        )
+        .expect("valid scene")
+    }
+
+    /// A calm rolling step with energy `e_j` (all potential).
+    fn step(e_j: f64) -> Observation {
+        Observation {
+            t_s: 0.5,
+            phase: Phase::Rolling,
+            laid_fraction: 0.1,
+            psi_low: 60.0,
+            x_m: 0.207,
+            omega_rad_s: 5.0,
+            kinetic_j: 0.0,
+            potential_j: e_j,
+            normal_n: 14.0,
+            friction_n: 0.1,
+            ledger: EnergyLedger::default(),
+            detached: 3,
+            active_bodies: 4,
+            max_joint_gap_m: 1e-5,
+            max_penetration_m: 1e-5,
+            dt_s: 1e-3,
+        }
+    }
+
+    fn calm() -> Health {
+        Health {
+            slip_m_s: Some(0.0),
+            farthest_m: 0.3,
+            lowest_m: 0.002,
+            max_spin_rad_s: 5.0,
+            finite: true,
+        }
+    }
+
+    #[test]
+    fn bounds_follow_the_scene() {
+        let b = Bounds::new(&yoga(), 2.0);
+        assert!((b.energy_rise_j - 0.02).abs() < 1e-12, "{b:?}");
+        assert!((b.joint_gap_m - 0.005).abs() < 1e-12, "{b:?}");
+        assert!((b.penetration_m - 0.015).abs() < 1e-12, "{b:?}");
+        // Tape length ~2.07 m: 10 (2.07 + 0.06) + 0.3 m/s * 60 s.
+        assert!((b.world_radius_m - 39.3).abs() < 0.1, "{b:?}");
+    }
+
+    #[test]
+    fn a_calm_step_passes_and_each_blow_up_is_named() {
+        let scene = yoga();
+        let mut guard = Guard::new(&scene, 1.0);
+        assert_eq!(guard.check(&step(0.99), &calm()), None);
+        assert_eq!(guard.check(&step(1.009), &calm()), None, "within 1 %");
+        assert!((guard.max_energy_rise_j - 0.009).abs() < 1e-9);
+
+        let cases: [(&str, Observation, Health); 7] = [
+            ("energy rising", step(1.011), calm()),
+            (
+                "joints separating",
+                Observation {
+                    max_joint_gap_m: 0.0051,
+                    ..step(1.0)
+                },
+                calm(),
+            ),
+            (
+                "floor penetration",
+                Observation {
+                    max_penetration_m: 0.016,
+                    ..step(1.0)
+                },
+                calm(),
+            ),
+            (
+                "fell through the floor",
+                step(1.0),
+                Health {
+                    lowest_m: -0.016,
+                    ..calm()
+                },
+            ),
+            (
+                "left the world",
+                step(1.0),
+                Health {
+                    farthest_m: 40.0,
+                    ..calm()
+                },
+            ),
+            (
+                "kinetic_j is not finite",
+                Observation {
+                    kinetic_j: f64::NAN,
+                    ..step(1.0)
+                },
+                calm(),
+            ),
+            (
+                "a body's position or velocity is not finite",
+                step(1.0),
+                Health {
+                    finite: false,
+                    ..calm()
+                },
+            ),
+        ];
+        for (want, obs, health) in cases {
+            let got = Guard::new(&scene, 1.0).check(&obs, &health);
+            assert!(
+                got.as_deref().is_some_and(|r| r.contains(want)),
+                "expected `{want}`, got {got:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn limits_need_consecutive_steps_and_are_noted_once() {
+        let scene = yoga();
+        let mut a = Applicability::new(&scene, None);
+        let slipping = Health {
+            slip_m_s: Some(0.1),
+            ..calm()
+        };
+        // One noisy step, then a calm one: nothing.
+        a.observe(&step(1.0), &slipping, 0.3);
+        a.observe(&step(1.0), &calm(), 0.3);
+        assert!(a.limits().is_empty());
+        for _ in 0..2 * CONSECUTIVE_STEPS {
+            a.observe(&step(1.0), &slipping, 0.3);
+        }
+        let kinds: Vec<LimitKind> = a.limits().iter().map(|l| l.kind).collect();
+        assert_eq!(kinds, vec![LimitKind::Slip]);
+
+        // Contact line 0.1 m behind 0.207 m of laid tape: bunching; lifted off the floor.
+        let mut a = Applicability::new(&scene, Some(0.5));
+        let behind = Observation {
+            x_m: 0.1,
+            normal_n: 0.0,
+            ..step(1.0)
+        };
+        for _ in 0..CONSECUTIVE_STEPS {
+            a.observe(&behind, &calm(), 0.3);
+        }
+        let limits = a.finish();
+        let kinds: Vec<LimitKind> = limits.iter().map(|l| l.kind).collect();
+        assert_eq!(
+            kinds,
+            vec![
+                LimitKind::Bunching,
+                LimitKind::LiftOff,
+                LimitKind::ExactModelHops
+            ]
+        );
+        assert_eq!(limits[2].t_s, None, "the hop at f = 0.5 was never reached");
+    }
+}
