@@ -332,6 +332,21 @@ fn invalid(key: &str, value: impl Display, rule: impl Into<String>) -> SceneErro
     }
 }
 
+/// A float as written in messages: plainly, or in exponent form when huge or tiny (so that
+/// `1e300` does not print 301 digits).
+struct Shown(f64);
+
+impl Display for Shown {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0.abs();
+        if v >= 1e15 || (v > 0.0 && v < 1e-6) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
+
 /// Rejects NaN and infinities, then returns `value` if `ok`, else an error with `rule`.
 /// `ok` is evaluated by the caller; for a non-finite value the finiteness error wins.
 fn check(key: &str, value: f64, ok: bool, rule: impl Into<String>) -> Result<f64, SceneError> {
@@ -341,7 +356,7 @@ fn check(key: &str, value: f64, ok: bool, rule: impl Into<String>) -> Result<f64
     if ok {
         Ok(value)
     } else {
-        Err(invalid(key, value, rule))
+        Err(invalid(key, Shown(value), rule))
     }
 }
 
