@@ -423,7 +423,8 @@ fn unreadable_scene_files_exit_2() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
     // (file name, contents or None for a folder, stderr must contain)
-    let cases: [(&str, Option<&[u8]>, &[&str]); 3] = [
+    type Case<'a> = (&'a str, Option<&'a [u8]>, &'a [&'a str]);
+    let cases: [Case; 3] = [
         (
             "folder.toml",
             None,
