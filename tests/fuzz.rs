@@ -1,8 +1,7 @@
 //! Property tests of scene loading: arbitrary text, mutated scene files and every key over
 //! wide ranges (zero, negative, NaN, infinities, huge and tiny values). Loading never
 //! panics, a rejection names a real key (or is a parse error), and every accepted scene
-//! keeps the invariants the model relies on. Case counts: `PROPTEST_CASES` overrides the
-//! defaults below.
+//! keeps the invariants the model relies on. Case counts: see [`cases`].
 
 use std::f64::consts::PI;
 
@@ -229,13 +228,21 @@ fn mutated_scene() -> impl Strategy<Value = String> {
     })
 }
 
+/// Cases per property: `PROPTEST_CASES` if set, else 2000 (10,000 in all, about a second).
+fn cases() -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(2000)
+}
+
 proptest! {
     // Failing cases are kept in proptest-regressions/fuzz.txt (commit it) and rerun first.
     #![proptest_config(ProptestConfig {
         failure_persistence: Some(Box::new(FileFailurePersistence::Direct(
             "proptest-regressions/fuzz.txt",
         ))),
-        ..ProptestConfig::with_cases(2000)
+        ..ProptestConfig::with_cases(cases())
     })]
 
     #[test]
