@@ -603,10 +603,17 @@ impl Model {
         let Some(coil) = self.coil else { return };
         let before = self.total_energy();
         let k = self.first_attached;
-        if let Some(prev) = self.free.back().copied() {
+        if let Some(prev) = self.free.back().copied()
+            && self.world.bodies[prev.body].colliders().is_empty()
+        {
             self.lay_link(prev.index, prev.body);
         }
         let handle = self.spawn_link(k, coil);
+        if k == 0 {
+            // The tape's free end rests on nothing but the floor: without a collider it
+            // would swing through it while it hangs from the coil.
+            self.lay_link(k, handle);
+        }
         // The previous free link was pinned to the coil at this link's near node.
         if let Some(prev) = self.free.back().copied() {
             self.unpin_from_coil(prev.body, coil);
