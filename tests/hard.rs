@@ -251,4 +251,11 @@ fn check_runs_a_folder_and_tabulates_every_outcome() {
         .stderr(predicate::str::contains(
             "error: no scene files (*.toml) in",
         ));
+    Command::cargo_bin("uncoil")
+        .unwrap()
+        .arg("check")
+        .arg(dir.path().join("missing"))
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("error: cannot read scene folder "));
 }
