@@ -259,3 +259,75 @@ fn check_runs_a_folder_and_tabulates_every_outcome() {
         .code(2)
         .stderr(predicate::str::contains("error: cannot read scene folder "));
 }
+
+/// Largest |omega_rad_s| (the coil's spin) in a written `samples.csv`.
+fn max_coil_spin(csv: &Path) -> f64 {
+    let text = std::fs::read_to_string(csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header.iter().position(|c| *c == "omega_rad_s").unwrap();
+    lines
+        .filter_map(|l| l.split(',').nth(col).and_then(|v| v.parse::<f64>().ok()))
+        .fold(0.0, |m, v| m.max(v.abs()))
+}
+
+#[test]
+#[ignore = "every hard case, a few minutes in release: cargo test --release -- --ignored"]
+fn every_hard_case_ends_with_a_stated_reason() {
+    let out = tempfile::tempdir().unwrap();
+    let files =
+        uncoil::check::scene_files(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/hard"))
+            .unwrap();
+    let cases: Vec<_> = files
+        .iter()
+        .map(|f| uncoil::check::check_scene(f, out.path()))
+        .collect();
+    println!("{}", uncoil::check::table(&cases));
+    let case = |name: &str| cases.iter().find(|c| c.name == name).unwrap();
+    for c in &cases {
+        assert!(
+            c.passed(),
+            "{}: {:?} {:?}",
+            c.name,
+            c.outcome,
+            c.output_problems
+        );
+        if let Some(r) = &c.report {
+            assert!(
+                r.max_energy_rise_rel <= uncoil::guard::ENERGY_RISE_TOLERANCE,
+                "{}: energy rose by {:e} of E0",
+                c.name,
+                r.max_energy_rise_rel
+            );
+        }
+    }
+    for name in [
+        "thin-300",
+        "push-10",
+        "frictionless",
+        "friction-0.05",
+        "zero-gravity",
+        "big-core",
+        "coarsest-links",
+        "bang-1e4",
+    ] {
+        assert!(
+            matches!(case(name).outcome, uncoil::check::Outcome::Completed(_)),
+            "{name}: {:?}",
+            case(name).outcome
+        );
+    }
+    assert!(matches!(
+        case("one-link-per-turn").outcome,
+        uncoil::check::Outcome::Rejected(_)
+    ));
+    assert!(matches!(
+        case("coarse-step").outcome,
+        uncoil::check::Outcome::Stopped(_)
+    ));
+    let spin = max_coil_spin(&out.path().join("bang-1e4/samples.csv"));
+    assert!(
+        spin > 1e4,
+        "bang-1e4: the coil spins at most {spin:.0} rad/s"
+    );
+}
