@@ -15,8 +15,9 @@ use crate::spiral::Spiral;
 /// A run stops when its total energy rises above `E0 (1 + ENERGY_RISE_TOLERANCE)`: every
 /// loss in the model dissipates, so a rise beyond rounding is the engine adding energy.
 pub const ENERGY_RISE_TOLERANCE: f64 = 0.01;
-/// A run stops when a joint separates by more than this many tape thicknesses b (the
-/// shipped scenes stay below 0.5 b, mostly in the final bang).
+/// A run stops when a joint separates by more than this many tape thicknesses b: the midline
+/// would then be broken at the tape's own scale. The yoga mat and the 300-turn tape stay
+/// below 0.5 b; the 1000-turn tape (b = 30 um) reaches it while rolling (`scenes/hard`).
 pub const JOINT_GAP_PER_THICKNESS: f64 = 1.0;
 /// A run stops when a collider sinks into the floor deeper than this fraction of the outer
 /// radius R, or a body's centre of mass falls that far below the floor.
