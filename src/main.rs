@@ -63,13 +63,13 @@ fn main() -> ExitCode {
                 }
             };
             match run_scene(&scene, out) {
-                Ok((text, Status::Completed)) => {
+                Ok((text, Status::Completed, _)) => {
                     print!("{text}");
                     ExitCode::SUCCESS
                 }
-                Ok((text, Status::Stopped)) => {
+                Ok((text, Status::Stopped, reason)) => {
                     print!("{text}");
-                    eprintln!("error: the run was stopped by a guard (see stop_reason above)");
+                    eprintln!("error: the run was stopped by a guard: {reason}");
                     ExitCode::from(3)
                 }
                 Err(e) => {
@@ -110,7 +110,8 @@ fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> ExitCode {
     }
 }
 
-fn run_scene(scene: &Scene, out: Option<PathBuf>) -> anyhow::Result<(String, Status)> {
+/// Runs `scene` into its output folder; returns the summary, the status and the stop reason.
+fn run_scene(scene: &Scene, out: Option<PathBuf>) -> anyhow::Result<(String, Status, String)> {
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&scene.name));
     std::fs::create_dir_all(&dir)
         .with_context(|| format!("cannot create output folder {}", dir.display()))?;
@@ -119,5 +120,5 @@ fn run_scene(scene: &Scene, out: Option<PathBuf>) -> anyhow::Result<(String, Sta
     let mut report = ReportObserver::new(&dir);
     let observers: &mut [&mut dyn Observer] = &mut [&mut csv, &mut report];
     let report = run(scene, observers)?;
-    Ok((summary(&report, &dir), report.status))
+    Ok((summary(&report, &dir), report.status, report.stop_reason))
 }

@@ -256,6 +256,7 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
     let mut guard = Guard::new(scene, e0);
     let mut limits = Applicability::new(scene, refs.exact.hop_onset_fraction());
     let mut status = Status::Completed;
+    let mut prev_logged = false;
 
     let mut wall = 0.0;
     let mut steps = 0u64;
@@ -277,7 +278,14 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
         if let Some(reason) = tripped.as_ref()
             && !crate::guard::is_finite(&obs, &health)
         {
-            // Keep the last finite step as the end of the run: no NaN reaches a table.
+            // Keep the last finite step as the end of the run, logged: no NaN reaches a
+            // table.
+            if let (Some(p), false) = (prev, prev_logged) {
+                let sample = make_sample(&p, xdot, e0, &refs);
+                for o in observers.iter_mut() {
+                    o.observe_sample(&sample)?;
+                }
+            }
             stop_reason = reason.clone();
             status = Status::Stopped;
             break;
@@ -307,7 +315,8 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
         limits.observe(&obs, &health, xdot);
         let done = obs.phase == Phase::Done;
         let timed_out = obs.t_s >= scene.stop.max_time_s;
-        if obs.t_s >= next_sample || done || timed_out || tripped.is_some() {
+        prev_logged = obs.t_s >= next_sample || done || timed_out || tripped.is_some();
+        if prev_logged {
             let sample = make_sample(&obs, xdot, e0, &refs);
             for o in observers.iter_mut() {
                 o.observe_sample(&sample)?;

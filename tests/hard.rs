@@ -72,7 +72,7 @@ fn a_torn_chain_is_stopped_by_a_guard_with_everything_logged() {
             "STOPPED by a guard: joints separating at t = ",
         ))
         .stderr(predicate::str::contains(
-            "error: the run was stopped by a guard",
+            "error: the run was stopped by a guard: joints separating at t = 0.074133 s",
         ));
     assert_eq!(verify_outputs(&out), Vec::<String>::new());
     let report: serde_json::Value =
