@@ -6,6 +6,8 @@
 //! [`reference`](mod@reference) (pure `f64`) -> [`run`] (loop, samples, report) -> [`output`] (files and
 //! the summary).
 
+pub mod check;
+pub mod guard;
 pub mod model;
 pub mod output;
 pub mod reference;

@@ -1,7 +1,10 @@
-//! The `uncoil` command line: `uncoil run SCENE [--out DIR]`.
+//! The `uncoil` command line: `uncoil run SCENE [--out DIR]` and
+//! `uncoil check [DIR] [--out DIR]`.
 //!
 //! Results go to stdout, diagnostics to stderr. Exit codes: 0 success, 1 a failure during
-//! the run (e.g. an output file could not be written), 2 bad input (scene or usage).
+//! the run (e.g. an output file could not be written), 2 bad input (scene or usage), 3 a
+//! guard stopped the run (a blow-up: its reason is on stderr and in `report.json`, and the
+//! outputs hold everything logged up to the stop).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -9,6 +12,8 @@ use std::process::ExitCode;
 use anyhow::Context as _;
 use clap::{Parser, Subcommand};
 
+use uncoil::check;
+use uncoil::guard::Status;
 use uncoil::output::{CsvObserver, ReportObserver, summary};
 use uncoil::run::{Observer, run};
 use uncoil::scene::Scene;
@@ -34,11 +39,21 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Run every scene of a folder (the hard cases), verify the outputs, print a table.
+    /// Exit 0 when every case ends with a stated reason and sound outputs, else 1.
+    Check {
+        /// Folder of scene files (default: scenes/hard).
+        dir: Option<PathBuf>,
+        /// Output folder, one subfolder per case (default: runs/check).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
+        Command::Check { dir, out } => check(dir, out),
         Command::Run { scene, out } => {
             let scene = match Scene::from_file(&scene) {
                 Ok(s) => s,
@@ -48,9 +63,14 @@ fn main() -> ExitCode {
                 }
             };
             match run_scene(&scene, out) {
-                Ok(text) => {
+                Ok((text, Status::Completed, _)) => {
                     print!("{text}");
                     ExitCode::SUCCESS
+                }
+                Ok((text, Status::Stopped, reason)) => {
+                    print!("{text}");
+                    eprintln!("error: the run was stopped by a guard: {reason}");
+                    ExitCode::from(3)
                 }
                 Err(e) => {
                     eprintln!("error: {e:#}");
@@ -61,7 +81,37 @@ fn main() -> ExitCode {
     }
 }
 
-fn run_scene(scene: &Scene, out: Option<PathBuf>) -> anyhow::Result<String> {
+fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> ExitCode {
+    let dir = dir.unwrap_or_else(|| PathBuf::from("scenes/hard"));
+    let out = out.unwrap_or_else(|| PathBuf::from("runs/check"));
+    let files = match check::scene_files(&dir) {
+        Ok(f) if f.is_empty() => {
+            eprintln!("error: no scene files (*.toml) in {}", dir.display());
+            return ExitCode::from(2);
+        }
+        Ok(f) => f,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            return ExitCode::from(2);
+        }
+    };
+    let mut cases = Vec::new();
+    for file in &files {
+        eprintln!("checking {} ...", file.display());
+        let case = check::check_scene(file, &out);
+        eprintln!("  {}: {}", case.outcome.word(), case.outcome.reason());
+        cases.push(case);
+    }
+    print!("{}", check::table(&cases));
+    if cases.iter().all(check::Case::passed) {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    }
+}
+
+/// Runs `scene` into its output folder; returns the summary, the status and the stop reason.
+fn run_scene(scene: &Scene, out: Option<PathBuf>) -> anyhow::Result<(String, Status, String)> {
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&scene.name));
     std::fs::create_dir_all(&dir)
         .with_context(|| format!("cannot create output folder {}", dir.display()))?;
@@ -70,5 +120,5 @@ fn run_scene(scene: &Scene, out: Option<PathBuf>) -> anyhow::Result<String> {
     let mut report = ReportObserver::new(&dir);
     let observers: &mut [&mut dyn Observer] = &mut [&mut csv, &mut report];
     let report = run(scene, observers)?;
-    Ok(summary(&report, &dir))
+    Ok((summary(&report, &dir), report.status, report.stop_reason))
 }

@@ -1,6 +1,8 @@
 //! Outputs of a run: `samples.csv` (written as the run goes), `report.json`, and the
-//! readable summary. Files are written under a temporary name and renamed when complete,
-//! so a killed run never leaves a file that looks finished. This module does no physics.
+//! readable summary. Files are written under a temporary name (`.partial`), flushed to disk
+//! and renamed when complete, and a finished file of an earlier run into the same folder is
+//! removed when a run starts, so a killed run never leaves a file that looks finished. This
+//! module does no physics.
 
 use std::fmt::Write as _;
 use std::fs::{self, File};
@@ -9,6 +11,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 
+use crate::guard::Status;
 use crate::run::{Observer, RunReport, Sample};
 use crate::scene::Scene;
 
@@ -81,12 +84,29 @@ fn sample_values(s: &Sample) -> [f64; 29] {
     ]
 }
 
-/// Writes `path` atomically: into `path.partial`, then renamed.
+/// Writes `path` atomically: into `path.partial`, flushed to disk, then renamed.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     let tmp = partial_path(path);
-    fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
+    let mut file =
+        File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
+    file.write_all(bytes)
+        .and_then(|()| file.sync_all())
+        .with_context(|| format!("cannot write {}", tmp.display()))?;
+    drop(file);
     fs::rename(&tmp, path).with_context(|| format!("cannot rename to {}", path.display()))?;
     Ok(())
+}
+
+/// Removes a finished output left by an earlier run into the same folder, so that a run
+/// killed before it finishes leaves only `.partial` files, never an older complete-looking
+/// file beside them.
+fn remove_stale(path: &Path) -> anyhow::Result<()> {
+    match fs::remove_file(path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            Err(e).with_context(|| format!("cannot remove the earlier {}", path.display()))
+        }
+        _ => Ok(()),
+    }
 }
 
 fn partial_path(path: &Path) -> PathBuf {
@@ -114,6 +134,7 @@ impl CsvObserver {
 
 impl Observer for CsvObserver {
     fn observe_init(&mut self, _scene: &Scene) -> anyhow::Result<()> {
+        remove_stale(&self.path)?;
         let tmp = partial_path(&self.path);
         let file =
             File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
@@ -141,9 +162,14 @@ impl Observer for CsvObserver {
     }
 
     fn observe_final(&mut self, _report: &RunReport) -> anyhow::Result<()> {
-        if let Some(mut out) = self.out.take() {
-            out.flush()?;
-            drop(out);
+        if let Some(out) = self.out.take() {
+            let file = out
+                .into_inner()
+                .map_err(|e| e.into_error())
+                .with_context(|| format!("cannot write {}", self.path.display()))?;
+            file.sync_all()
+                .with_context(|| format!("cannot write {}", self.path.display()))?;
+            drop(file);
             fs::rename(partial_path(&self.path), &self.path)
                 .with_context(|| format!("cannot rename to {}", self.path.display()))?;
         }
@@ -167,7 +193,7 @@ impl ReportObserver {
 
 impl Observer for ReportObserver {
     fn observe_init(&mut self, _scene: &Scene) -> anyhow::Result<()> {
-        Ok(())
+        remove_stale(&self.path)
     }
     fn observe_sample(&mut self, _sample: &Sample) -> anyhow::Result<()> {
         Ok(())
@@ -204,13 +230,17 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
     );
     let _ = writeln!(
         o,
-        "  {} links ({} per turn), {} steps, {:.3} s simulated in {:.3} s wall ({:.3} s to the bang); stopped: {}",
+        "  {} links ({} per turn), {} steps, {:.3} s simulated in {:.3} s wall ({:.3} s to the bang); {}: {}",
         report.links,
         s.links_per_turn,
         report.steps,
         report.sim_time_s,
         report.wall_time_s,
         report.wall_time_rolling_s,
+        match report.status {
+            Status::Completed => "completed",
+            Status::Stopped => "STOPPED by a guard",
+        },
         report.stop_reason
     );
     let _ = writeln!(o);
@@ -305,9 +335,32 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
     let _ = writeln!(o);
     let _ = writeln!(
         o,
-        "Max joint separation {:.2e} m, max floor penetration {:.2e} m.",
-        report.max_joint_gap_m, report.max_penetration_m
+        "Max joint separation {:.2e} m (bound {:.2e}), max floor penetration {:.2e} m (bound {:.2e}).",
+        report.max_joint_gap_m,
+        report.bounds.joint_gap_m,
+        report.max_penetration_m,
+        report.bounds.penetration_m
     );
+    let _ = writeln!(
+        o,
+        "Max energy rise above E0 {:+.2e} of E0 (bound {:.0e}); fastest spin {:.4e} rad/s.",
+        report.max_energy_rise_rel,
+        crate::guard::ENERGY_RISE_TOLERANCE,
+        report.max_spin_rad_s
+    );
+    if !report.reference_limits.is_empty() {
+        let _ = writeln!(o, "Where the references stop applying:");
+        for l in &report.reference_limits {
+            let _ = writeln!(
+                o,
+                "  {:<10} t = {:>9} s, r = {:.4e} m: {}",
+                crate::guard::label(l.kind),
+                secs(l.t_s),
+                l.r_m,
+                l.detail
+            );
+        }
+    }
     let _ = writeln!(
         o,
         "Wrote {} and {}",

@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::guard::{Applicability, Bounds, Guard, ReferenceLimit, Status};
 use crate::model::{EnergyLedger, Model, Observation, Phase};
 use crate::reference::{Continuum, ExactGeometry, ForceTorque, Params};
 use crate::scene::Scene;
@@ -148,8 +149,19 @@ pub struct RunReport {
     pub wall_time_rolling_s: f64,
     /// Simulated time (s).
     pub sim_time_s: f64,
+    /// Whether the run ended as planned or a guard stopped it.
+    pub status: Status,
     /// Why the run stopped.
     pub stop_reason: String,
+    /// The guards' bounds the run was held to.
+    pub bounds: Bounds,
+    /// Largest rise of the total energy above E0 over the run, over E0 (0 if it never
+    /// rose).
+    pub max_energy_rise_rel: f64,
+    /// Fastest spin of any body over the run (rad/s).
+    pub max_spin_rad_s: f64,
+    /// Where the references stop applying (slip, bunching, lift-off, r ~ b, ...).
+    pub reference_limits: Vec<ReferenceLimit>,
     /// Milestones at 0.75R, 0.5R, 0.25R, 0.1R and 2b.
     pub milestones: Vec<Milestone>,
     /// The energy ledger.
@@ -232,8 +244,8 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
     for o in observers.iter_mut() {
         o.observe_init(scene)?;
     }
-    let (k0, p0) = model.energy();
-    let e0 = k0 + p0;
+    let initial = model.observe();
+    let e0 = initial.kinetic_j + initial.potential_j;
     let radii = milestone_radii(scene);
     let big_r = scene.tape.outer_radius_m;
     let fractions: Vec<f64> = radii
@@ -241,6 +253,10 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
         .map(|(_, r)| 1.0 - (r / big_r).powi(2))
         .collect();
     let mut hits: Vec<Option<MilestoneHit>> = radii.iter().map(|_| None).collect();
+    let mut guard = Guard::new(scene, e0);
+    let mut limits = Applicability::new(scene, refs.exact.hop_onset_fraction());
+    let mut status = Status::Completed;
+    let mut prev_logged = false;
 
     let mut wall = 0.0;
     let mut steps = 0u64;
@@ -257,6 +273,23 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
         let obs = model.step();
         wall += start.elapsed().as_secs_f64();
         steps += 1;
+        let health = model.health();
+        let tripped = guard.check(&obs, &health);
+        if let Some(reason) = tripped.as_ref()
+            && !crate::guard::is_finite(&obs, &health)
+        {
+            // Keep the last finite step as the end of the run, logged: no NaN reaches a
+            // table.
+            if let (Some(p), false) = (prev, prev_logged) {
+                let sample = make_sample(&p, xdot, e0, &refs);
+                for o in observers.iter_mut() {
+                    o.observe_sample(&sample)?;
+                }
+            }
+            stop_reason = reason.clone();
+            status = Status::Stopped;
+            break;
+        }
         max_gap = max_gap.max(obs.max_joint_gap_m);
         max_pen = max_pen.max(obs.max_penetration_m);
         if let Some(p) = prev {
@@ -279,9 +312,11 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
                 wall_rolling = Some(wall);
             }
         }
+        limits.observe(&obs, &health, xdot);
         let done = obs.phase == Phase::Done;
         let timed_out = obs.t_s >= scene.stop.max_time_s;
-        if obs.t_s >= next_sample || done || timed_out {
+        prev_logged = obs.t_s >= next_sample || done || timed_out || tripped.is_some();
+        if prev_logged {
             let sample = make_sample(&obs, xdot, e0, &refs);
             for o in observers.iter_mut() {
                 o.observe_sample(&sample)?;
@@ -289,6 +324,11 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
             next_sample = obs.t_s + scene.sample_interval_s;
         }
         prev = Some(obs);
+        if let Some(reason) = tripped {
+            stop_reason = reason;
+            status = Status::Stopped;
+            break;
+        }
         if done {
             stop_reason = "the final bang settled (stop.settle_time_s)".to_string();
             break;
@@ -298,7 +338,8 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
             break;
         }
     }
-    let last = prev.expect("at least one step");
+    // A run stopped at its first step ends where it began.
+    let last = prev.unwrap_or(initial);
     let flat = model.flat_potential_j();
     let (bang_time, before, kinetic_into, available) = match bang {
         Some((t, o)) => (
@@ -361,7 +402,12 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
         wall_time_s: wall,
         wall_time_rolling_s: wall_rolling.unwrap_or(wall),
         sim_time_s: last.t_s,
+        status,
         stop_reason,
+        bounds: guard.bounds,
+        max_energy_rise_rel: guard.max_energy_rise_j / e0.abs(),
+        max_spin_rad_s: guard.max_spin_rad_s,
+        reference_limits: limits.finish(),
         milestones,
         ledger,
         geo_hop_fraction: refs.exact.hop_onset_fraction(),

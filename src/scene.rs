@@ -29,7 +29,7 @@ const DEFAULT_ITERATIONS: i64 = 4;
 /// Default `solver.freeze_speed_m_s`.
 const DEFAULT_FREEZE_SPEED_M_S: f64 = 0.001;
 /// Default `solver.bang_step_rad`.
-const DEFAULT_BANG_STEP_RAD: f64 = 0.3;
+const DEFAULT_BANG_STEP_RAD: f64 = 0.05;
 /// Default `solver.contact_hz`.
 const DEFAULT_CONTACT_HZ: f64 = 1.0e4;
 /// Default `solver.joint_hz`.
@@ -45,6 +45,18 @@ const DEFAULT_SAMPLE_INTERVAL_S: f64 = 0.001;
 const LINKS_PER_TURN_RANGE: std::ops::RangeInclusive<i64> = 3..=4096;
 /// Bounds of `solver.iterations`.
 const ITERATIONS_RANGE: std::ops::RangeInclusive<i64> = 1..=1000;
+/// Bounds of `tape.outer_radius_m` (m): the engine's tolerances scale with R (its length
+/// unit is R/10), and they were tuned for coils from a millimetre to metres.
+const OUTER_RADIUS_RANGE_M: std::ops::RangeInclusive<f64> = 0.001..=100.0;
+/// Upper bound of `tape.mass_kg` (kg).
+const MAX_MASS_KG: f64 = 1.0e6;
+/// Upper bound of the number of links of a tape (turns times `links_per_turn`): the model
+/// keeps every link's geometry in memory.
+const MAX_LINKS: f64 = 1.0e6;
+/// Upper bound of `solver.steps_per_link`.
+const MAX_STEPS_PER_LINK: f64 = 1000.0;
+/// Upper bound of `stop.max_time_s` (s).
+const MAX_MAX_TIME_S: f64 = 1.0e4;
 /// Upper bound of `gravity.g_m_s2` (m/s²).
 const MAX_G_M_S2: f64 = 1000.0;
 /// Upper bound of `push.contact_speed_m_s` (m/s).
@@ -119,7 +131,7 @@ pub struct Solver {
     /// A laid link slower than this is frozen (removed from the engine), m/s
     /// (default: 0.001).
     pub freeze_speed_m_s: f64,
-    /// In the final bang, the largest rotation of any body in one step, rad (default: 0.3).
+    /// In the final bang, the largest rotation of any body in one step, rad (default: 0.05).
     /// No link is shed there, so the rolling rule (`steps_per_link`) no longer applies.
     pub bang_step_rad: f64,
     /// Natural frequency of the engine's soft floor contact, Hz (default: 1e4). The coil
@@ -344,6 +356,21 @@ fn invalid(key: &str, value: impl Display, rule: impl Into<String>) -> SceneErro
     }
 }
 
+/// A float as written in messages: plainly, or in exponent form when huge or tiny (so that
+/// `1e300` does not print 301 digits).
+struct Shown(f64);
+
+impl Display for Shown {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0.abs();
+        if v >= 1e15 || (v > 0.0 && v < 1e-6) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
+
 /// Rejects NaN and infinities, then returns `value` if `ok`, else an error with `rule`.
 /// `ok` is evaluated by the caller; for a non-finite value the finiteness error wins.
 fn check(key: &str, value: f64, ok: bool, rule: impl Into<String>) -> Result<f64, SceneError> {
@@ -353,7 +380,7 @@ fn check(key: &str, value: f64, ok: bool, rule: impl Into<String>) -> Result<f64
     if ok {
         Ok(value)
     } else {
-        Err(invalid(key, value, rule))
+        Err(invalid(key, Shown(value), rule))
     }
 }
 
@@ -412,8 +439,12 @@ impl Scene {
         let r = check(
             "tape.outer_radius_m",
             t.outer_radius_m,
-            t.outer_radius_m > 0.0,
-            "must be > 0",
+            OUTER_RADIUS_RANGE_M.contains(&t.outer_radius_m),
+            format!(
+                "must be >= {} and <= {}",
+                OUTER_RADIUS_RANGE_M.start(),
+                OUTER_RADIUS_RANGE_M.end()
+            ),
         )?;
         let b = check(
             "tape.thickness_m",
@@ -424,7 +455,12 @@ impl Scene {
                 r / 2.0
             ),
         )?;
-        let mass = check("tape.mass_kg", t.mass_kg, t.mass_kg > 0.0, "must be > 0")?;
+        let mass = check(
+            "tape.mass_kg",
+            t.mass_kg,
+            t.mass_kg > 0.0 && t.mass_kg <= MAX_MASS_KG,
+            format!("must be > 0 and <= {MAX_MASS_KG}"),
+        )?;
         let core = check(
             "tape.core_radius_m",
             t.core_radius_m,
@@ -443,20 +479,43 @@ impl Scene {
         };
 
         // [discretisation]
+        // A link must be shorter than the outer radius: 2 pi (R - b/2) / n <= R. Values
+        // from 1 up get this rule (one link per turn would be a chord of a whole turn), the
+        // range check only catches what no tape allows.
         let key = "discretisation.links_per_turn";
-        let links_per_turn = check_int(
-            key,
-            file.discretisation.links_per_turn,
-            &LINKS_PER_TURN_RANGE,
-        )?;
-        let outer_link_m = 2.0 * std::f64::consts::PI * (r - b / 2.0) / f64::from(links_per_turn);
-        if outer_link_m > r {
+        let raw = file.discretisation.links_per_turn;
+        let outer_arc_m = 2.0 * std::f64::consts::PI * (r - b / 2.0);
+        #[allow(clippy::cast_possible_truncation)]
+        let coarsest = ((outer_arc_m / r).ceil() as i64).max(*LINKS_PER_TURN_RANGE.start());
+        #[allow(clippy::cast_precision_loss)]
+        let too_long = |n: i64| {
+            let outer_link_m = outer_arc_m / n as f64;
+            invalid(
+                key,
+                n,
+                format!(
+                    "a link must be shorter than the outer radius (outermost link {outer_link_m} m \
+                     > tape.outer_radius_m = {r} m): the coarsest this tape allows is \
+                     {coarsest} links per turn"
+                ),
+            )
+        };
+        if (1..coarsest).contains(&raw) {
+            return Err(too_long(raw));
+        }
+        let links_per_turn = check_int(key, raw, &LINKS_PER_TURN_RANGE)?;
+        if outer_arc_m / f64::from(links_per_turn) > r {
+            return Err(too_long(raw));
+        }
+        let links = (r - core - b) / b * f64::from(links_per_turn);
+        if links > MAX_LINKS {
             return Err(invalid(
                 key,
                 links_per_turn,
                 format!(
-                    "a link must be shorter than the outer radius (outermost link {outer_link_m} m \
-                     > tape.outer_radius_m = {r} m)"
+                    "the tape would have {links:.0} links ({:.0} turns), more than {MAX_LINKS:.0}: \
+                     use fewer links per turn or a thicker tape",
+                    (r - core - b) / b
                 ),
             ));
         }
@@ -504,8 +563,8 @@ impl Scene {
             steps_per_link: check(
                 "solver.steps_per_link",
                 s.steps_per_link,
-                s.steps_per_link >= 1.0,
-                "must be >= 1",
+                (1.0..=MAX_STEPS_PER_LINK).contains(&s.steps_per_link),
+                format!("must be >= 1 and <= {MAX_STEPS_PER_LINK}"),
             )?,
             iterations: check_int("solver.iterations", s.iterations, &ITERATIONS_RANGE)?,
             freeze_speed_m_s: check(
@@ -559,8 +618,8 @@ impl Scene {
             max_time_s: check(
                 "stop.max_time_s",
                 st.max_time_s,
-                st.max_time_s > 0.0,
-                "must be > 0",
+                st.max_time_s > 0.0 && st.max_time_s <= MAX_MAX_TIME_S,
+                format!("must be > 0 and <= {MAX_MAX_TIME_S}"),
             )?,
             settle_time_s: check(
                 "stop.settle_time_s",
@@ -881,6 +940,11 @@ contact_speed_m_s = 0.3
             ("stop", "max_time_s", "0.0"),
             ("stop", "settle_time_s", "-0.01"),
             ("output", "sample_interval_s", "-0.001"),
+            ("tape", "outer_radius_m", "100.1"),
+            ("tape", "outer_radius_m", "0.0009"),
+            ("tape", "mass_kg", "1e7"),
+            ("solver", "steps_per_link", "1001"),
+            ("stop", "max_time_s", "1e5"),
         ] {
             let msg = rejects(section, key, bad);
             assert!(msg.contains(": must") || msg.contains(": a link"), "{msg}");
@@ -928,6 +992,31 @@ contact_speed_m_s = 0.3
             "{msg}"
         );
         assert!(Scene::from_toml_str(&with("discretisation", "links_per_turn", "7"), "t").is_ok());
+    }
+
+    #[test]
+    fn one_link_per_turn_names_the_geometric_rule_and_the_coarsest_value() {
+        for n in ["1", "2", "6"] {
+            let msg = err(&with("discretisation", "links_per_turn", n));
+            assert!(
+                msg.starts_with(&format!(
+                    "discretisation.links_per_turn = {n}: a link must be shorter than the outer radius"
+                )) && msg.ends_with("the coarsest this tape allows is 7 links per turn"),
+                "{msg}"
+            );
+        }
+    }
+
+    #[test]
+    fn too_many_links_rejected() {
+        // 0.06 m of 1 um tape is ~60k turns, 1.9M links at 32 per turn.
+        let msg = err(&with("tape", "thickness_m", "1e-6"));
+        assert!(
+            msg.starts_with(
+                "discretisation.links_per_turn = 32: the tape would have 1919968 links"
+            ),
+            "{msg}"
+        );
     }
 
     #[test]

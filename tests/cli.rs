@@ -115,7 +115,7 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
     (
         "two links per turn",
         Edit::Append("[discretisation]\nlinks_per_turn = 2"),
-        &["discretisation.links_per_turn = 2: must be >= 3 and <= 4096"],
+        &["discretisation.links_per_turn = 2: a link must be shorter than the outer radius"],
     ),
     (
         "negative friction",
@@ -139,6 +139,175 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
         "huge push",
         Edit::Replace("contact_speed_m_s = 0.3", "contact_speed_m_s = 1e9"),
         &["push.contact_speed_m_s = 1000000000: must be > 0 and <= 1000"],
+    ),
+    // Unknown keys and sections.
+    (
+        "unknown top-level key",
+        Edit::Replace("name = \"case\"", "name = \"case\"\ncolour = \"red\""),
+        &[
+            "cannot parse scene case: ",
+            "unknown field `colour`",
+            "`tape`",
+        ],
+    ),
+    (
+        "unknown section",
+        Edit::Append("[wind]\nspeed_m_s = 3.0"),
+        &[
+            "cannot parse scene case: ",
+            "unknown field `wind`",
+            "`discretisation`",
+        ],
+    ),
+    (
+        "misspelt key",
+        Edit::Append("[solver]\nmax_dt = 0.001"),
+        &["unknown field `max_dt`", "`max_dt_s`"],
+    ),
+    // Wrong types.
+    (
+        "fractional link count",
+        Edit::Append("[discretisation]\nlinks_per_turn = 32.5"),
+        &[
+            "cannot parse scene case: ",
+            "invalid type: floating point `32.5`, expected i64",
+        ],
+    ),
+    (
+        "boolean mass",
+        Edit::Replace("mass_kg = 1.5", "mass_kg = true"),
+        &["invalid type: boolean `true`, expected f64"],
+    ),
+    (
+        "array radius",
+        Edit::Replace("outer_radius_m = 0.06", "outer_radius_m = [0.06]"),
+        &["invalid type: sequence, expected f64"],
+    ),
+    (
+        "unknown contact model",
+        Edit::Append("[contact]\nmodel = \"bristle\""),
+        &["unknown variant `bristle`, expected `spiral`"],
+    ),
+    (
+        "not TOML at all",
+        Edit::Append("this is not toml"),
+        &[
+            "cannot parse scene case: ",
+            "line 8, column 6",
+            "key with no value, expected `=`",
+        ],
+    ),
+    // Negative, zero, NaN and infinite values.
+    (
+        "negative core",
+        Edit::Replace("mass_kg = 1.5", "mass_kg = 1.5\ncore_radius_m = -0.01"),
+        &["tape.core_radius_m = -0.01: must be >= 0"],
+    ),
+    (
+        "negative gravity",
+        Edit::Append("[gravity]\ng_m_s2 = -9.81"),
+        &["gravity.g_m_s2 = -9.81: must be >= 0 and <= 1000"],
+    ),
+    (
+        "zero outer radius",
+        Edit::Replace("outer_radius_m = 0.06", "outer_radius_m = 0.0"),
+        &["tape.outer_radius_m = 0: must be >= 0.001 and <= 100"],
+    ),
+    (
+        "zero time step",
+        Edit::Append("[solver]\nmax_dt_s = 0.0"),
+        &["solver.max_dt_s = 0: must be > 0 and <= 0.1"],
+    ),
+    (
+        "NaN push",
+        Edit::Replace("contact_speed_m_s = 0.3", "contact_speed_m_s = nan"),
+        &["push.contact_speed_m_s = NaN: must be finite"],
+    ),
+    (
+        "infinite mass",
+        Edit::Replace("mass_kg = 1.5", "mass_kg = inf"),
+        &["tape.mass_kg = inf: must be finite"],
+    ),
+    (
+        "negative infinite friction",
+        Edit::Append("[floor]\nfriction = -inf"),
+        &["floor.friction = -inf: must be finite"],
+    ),
+    // Huge and tiny values.
+    (
+        "huge radius",
+        Edit::Replace("outer_radius_m = 0.06", "outer_radius_m = 1e300"),
+        &["tape.outer_radius_m = 1e300: must be >= 0.001 and <= 100"],
+    ),
+    (
+        "huge mass",
+        Edit::Replace("mass_kg = 1.5", "mass_kg = 1e300"),
+        &["tape.mass_kg = 1e300: must be > 0 and <= 1000000"],
+    ),
+    (
+        "link count beyond i64",
+        Edit::Append("[discretisation]\nlinks_per_turn = 99999999999999999999"),
+        &["cannot parse scene case: ", "line 9"],
+    ),
+    (
+        "huge link count",
+        Edit::Append("[discretisation]\nlinks_per_turn = 5000"),
+        &["discretisation.links_per_turn = 5000: must be >= 3 and <= 4096"],
+    ),
+    (
+        "tape too thin for its links",
+        Edit::Replace("thickness_m = 0.005", "thickness_m = 1e-9"),
+        &[
+            "discretisation.links_per_turn = 32: the tape would have ",
+            "more than 1000000: use fewer links per turn or a thicker tape",
+        ],
+    ),
+    (
+        "huge gravity",
+        Edit::Append("[gravity]\ng_m_s2 = 1e6"),
+        &["gravity.g_m_s2 = 1000000: must be >= 0 and <= 1000"],
+    ),
+    (
+        "huge steps per link",
+        Edit::Append("[solver]\nsteps_per_link = 1e9"),
+        &["solver.steps_per_link = 1000000000: must be >= 1 and <= 1000"],
+    ),
+    (
+        "huge max time",
+        Edit::Append("[stop]\nmax_time_s = 1e9"),
+        &["stop.max_time_s = 1000000000: must be > 0 and <= 10000"],
+    ),
+    // Inconsistent geometry.
+    (
+        "one link per turn",
+        Edit::Append("[discretisation]\nlinks_per_turn = 1"),
+        &[
+            "discretisation.links_per_turn = 1: a link must be shorter than the outer radius",
+            "the coarsest this tape allows is 7 links per turn",
+        ],
+    ),
+    (
+        "bang radius beyond the coil",
+        Edit::Append("[stop]\nbang_radius_m = 0.07"),
+        &[
+            "stop.bang_radius_m = 0.07: must be > tape.core_radius_m (= 0) and < tape.outer_radius_m (= 0.06)",
+        ],
+    ),
+    (
+        "bang radius inside the core",
+        Edit::Replace(
+            "mass_kg = 1.5",
+            "mass_kg = 1.5\ncore_radius_m = 0.02\n[stop]\nbang_radius_m = 0.01",
+        ),
+        &["stop.bang_radius_m = 0.01: must be > tape.core_radius_m (= 0.02)"],
+    ),
+    (
+        "zero push without gravity",
+        Edit::Replace(
+            "contact_speed_m_s = 0.3",
+            "contact_speed_m_s = 0.0\n[gravity]\ng_m_s2 = 0.0",
+        ),
+        &["push.contact_speed_m_s = 0: must be > 0 when gravity.g_m_s2 = 0: nothing would move"],
     ),
 ];
 
@@ -247,4 +416,87 @@ fn help_exits_0_and_lists_run() {
         .success()
         .stdout(predicate::str::contains("run"))
         .stdout(predicate::str::contains("Usage: uncoil"));
+}
+
+#[test]
+fn unreadable_scene_files_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    // (file name, contents or None for a folder, stderr must contain)
+    type Case<'a> = (&'a str, Option<&'a [u8]>, &'a [&'a str]);
+    let cases: [Case; 3] = [
+        (
+            "folder.toml",
+            None,
+            &["error: cannot read scene file ", "folder.toml"],
+        ),
+        (
+            "latin1.toml",
+            Some(b"name = \"caf\xe9\"\n"),
+            &[
+                "error: cannot read scene file ",
+                "stream did not contain valid UTF-8",
+            ],
+        ),
+        (
+            "empty.toml",
+            Some(b""),
+            &["error: cannot parse scene empty: ", "missing field `tape`"],
+        ),
+    ];
+    for (name, contents, expected) in cases {
+        let path = dir.path().join(name);
+        match contents {
+            Some(bytes) => std::fs::write(&path, bytes).unwrap(),
+            None => std::fs::create_dir_all(&path).unwrap(),
+        }
+        let (code, stdout, stderr) = run(&path, &out);
+        assert_eq!(code, Some(2), "{name}: {stderr}");
+        assert!(stdout.is_empty(), "{name}: {stdout}");
+        for want in expected {
+            assert!(
+                stderr.contains(want),
+                "{name}: stderr lacks `{want}`: {stderr}"
+            );
+        }
+        assert!(!out.exists(), "{name}: output folder created");
+    }
+}
+
+#[test]
+fn output_folder_that_is_a_file_exits_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("case.toml");
+    std::fs::write(&scene, BASE).unwrap();
+    let out = dir.path().join("out");
+    std::fs::write(&out, "a regular file").unwrap();
+    run_command(&scene, &out)
+        .assert()
+        .code(1)
+        .stdout(predicate::str::is_empty())
+        .stderr(predicate::str::starts_with(
+            "error: cannot create output folder ",
+        ));
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "a regular file");
+}
+
+#[test]
+fn unwritable_output_file_exits_1_without_a_complete_looking_file() {
+    // The CSV's temporary name is taken by a folder: the run cannot write it. (Permission
+    // bits would not stop root, who runs CI here; this does.)
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("case.toml");
+    std::fs::write(&scene, BASE).unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(out.join("samples.csv.partial")).unwrap();
+    run_command(&scene, &out)
+        .assert()
+        .code(1)
+        .stdout(predicate::str::is_empty())
+        .stderr(predicate::str::contains(format!(
+            "error: cannot create {}: Is a directory",
+            out.join("samples.csv.partial").display()
+        )));
+    assert!(!out.join("samples.csv").exists());
+    assert!(!out.join("report.json").exists());
 }

@@ -1,4 +1,6 @@
 //! Integration tests: one binary, so the engine links once.
 
 mod cli;
+mod fuzz;
+mod hard;
 mod sim;

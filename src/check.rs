@@ -1,0 +1,354 @@
+//! The stability check: runs every scene of a folder (the hard cases of `scenes/hard`),
+//! writes each run's outputs, verifies them (present under their final names, every CSV
+//! row complete, no NaN or infinity anywhere) and tabulates the outcome, the health maxima
+//! and where the references stop applying. It adds no physics and no output format.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+
+use crate::guard::{Status, label};
+use crate::output::{CSV_COLUMNS, CsvObserver, ReportObserver};
+use crate::run::{Observer, RunReport, run};
+use crate::scene::Scene;
+
+/// How one case ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// The scene was rejected when loaded, with this message.
+    Rejected(String),
+    /// The run ended as planned, for this reason.
+    Completed(String),
+    /// A guard stopped the run, for this reason.
+    Stopped(String),
+    /// The run failed (an output could not be written), with this error.
+    Failed(String),
+}
+
+impl Outcome {
+    /// One word for the table.
+    pub fn word(&self) -> &'static str {
+        match self {
+            Outcome::Rejected(_) => "rejected",
+            Outcome::Completed(_) => "completed",
+            Outcome::Stopped(_) => "stopped",
+            Outcome::Failed(_) => "FAILED",
+        }
+    }
+
+    /// The stated reason or message.
+    pub fn reason(&self) -> &str {
+        match self {
+            Outcome::Rejected(s) | Outcome::Completed(s) | Outcome::Stopped(s) => s,
+            Outcome::Failed(s) => s,
+        }
+    }
+}
+
+/// The result of one case.
+#[derive(Debug, Clone)]
+pub struct Case {
+    /// The scene file's stem.
+    pub name: String,
+    /// How it ended.
+    pub outcome: Outcome,
+    /// The run's report, if it ran.
+    pub report: Option<RunReport>,
+    /// What is wrong with the written outputs (empty when they are sound).
+    pub output_problems: Vec<String>,
+}
+
+impl Case {
+    /// A case passes when it ended with a stated reason (completed, stopped by a guard, or
+    /// rejected with a message) and its outputs are sound.
+    pub fn passed(&self) -> bool {
+        !matches!(self.outcome, Outcome::Failed(_)) && self.output_problems.is_empty()
+    }
+}
+
+/// The scene files (`*.toml`) of `dir`, sorted by name.
+pub fn scene_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("cannot read scene folder {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    Ok(files)
+}
+
+/// Loads and runs one scene file, writing its outputs into `out_root/<file stem>`, and
+/// verifies them.
+pub fn check_scene(path: &Path, out_root: &Path) -> Case {
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let scene = match Scene::from_file(path) {
+        Ok(s) => s,
+        Err(e) => {
+            return Case {
+                name,
+                outcome: Outcome::Rejected(e.to_string()),
+                report: None,
+                output_problems: Vec::new(),
+            };
+        }
+    };
+    let dir = out_root.join(&name);
+    match run_into(&scene, &dir) {
+        Ok(report) => Case {
+            name,
+            outcome: match report.status {
+                Status::Completed => Outcome::Completed(report.stop_reason.clone()),
+                Status::Stopped => Outcome::Stopped(report.stop_reason.clone()),
+            },
+            output_problems: verify_outputs(&dir),
+            report: Some(report),
+        },
+        Err(e) => Case {
+            name,
+            outcome: Outcome::Failed(format!("{e:#}")),
+            report: None,
+            output_problems: Vec::new(),
+        },
+    }
+}
+
+fn run_into(scene: &Scene, dir: &Path) -> anyhow::Result<RunReport> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create output folder {}", dir.display()))?;
+    let mut csv = CsvObserver::new(dir);
+    let mut json = ReportObserver::new(dir);
+    let observers: &mut [&mut dyn Observer] = &mut [&mut csv, &mut json];
+    run(scene, observers)
+}
+
+/// What is wrong with the outputs in `dir`: a missing `samples.csv` or `report.json`, a
+/// leftover `.partial` file, a CSV row with the wrong number of cells or a cell that is
+/// not a finite number (empty cells are allowed), a `NaN` or infinity in the JSON.
+pub fn verify_outputs(dir: &Path) -> Vec<String> {
+    let mut problems = Vec::new();
+    for name in ["samples.csv", "report.json"] {
+        let partial = dir.join(format!("{name}.partial"));
+        if partial.exists() {
+            problems.push(format!("{} left behind", partial.display()));
+        }
+    }
+    match std::fs::read_to_string(dir.join("samples.csv")) {
+        Ok(text) => problems.extend(csv_problems(&text)),
+        Err(e) => problems.push(format!("samples.csv: {e}")),
+    }
+    match std::fs::read_to_string(dir.join("report.json")) {
+        Ok(text) => match serde_json::from_str::<serde_json::Value>(&text) {
+            Ok(v) => {
+                let mut nulls = Vec::new();
+                unexpected_nulls(&v, "", &mut nulls);
+                problems.extend(
+                    nulls
+                        .into_iter()
+                        .map(|p| format!("report.json: {p} is null (NaN or infinity)")),
+                );
+            }
+            Err(e) => problems.push(format!("report.json is not JSON: {e}")),
+        },
+        Err(e) => problems.push(format!("report.json: {e}")),
+    }
+    problems
+}
+
+/// Collects the paths of `null`s in a report that are not an absent optional value:
+/// serde writes a NaN or an infinity as `null`, and the report's only optional values are
+/// the milestones, `geo_hop_fraction`, `ledger.bang_time_s` and the limits' `t_s`.
+fn unexpected_nulls(v: &serde_json::Value, path: &str, out: &mut Vec<String>) {
+    match v {
+        serde_json::Value::Null => {
+            let optional = path.starts_with("milestones")
+                || path == "geo_hop_fraction"
+                || path == "ledger.bang_time_s"
+                || (path.starts_with("reference_limits") && path.ends_with(".t_s"));
+            if !optional {
+                out.push(path.to_owned());
+            }
+        }
+        serde_json::Value::Array(a) => {
+            for (i, x) in a.iter().enumerate() {
+                unexpected_nulls(x, &format!("{path}[{i}]"), out);
+            }
+        }
+        serde_json::Value::Object(m) => {
+            for (k, x) in m {
+                let p = if path.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{path}.{k}")
+                };
+                unexpected_nulls(x, &p, out);
+            }
+        }
+        _ => {}
+    }
+}
+
+/// Problems of a `samples.csv` text: header, cell count, non-finite cells.
+pub fn csv_problems(text: &str) -> Vec<String> {
+    let mut problems = Vec::new();
+    let mut lines = text.lines();
+    if lines.next() != Some(CSV_COLUMNS.join(",").as_str()) {
+        problems.push("samples.csv: header differs from the documented columns".to_owned());
+    }
+    let mut rows = 0usize;
+    for (i, line) in lines.enumerate() {
+        rows += 1;
+        let cells: Vec<&str> = line.split(',').collect();
+        if cells.len() != CSV_COLUMNS.len() {
+            problems.push(format!(
+                "samples.csv row {}: {} cells, expected {}",
+                i + 1,
+                cells.len(),
+                CSV_COLUMNS.len()
+            ));
+            continue;
+        }
+        for (cell, column) in cells.iter().zip(CSV_COLUMNS) {
+            if cell.is_empty() {
+                continue;
+            }
+            if !cell.parse::<f64>().is_ok_and(f64::is_finite) {
+                problems.push(format!(
+                    "samples.csv row {}: {column} = {cell:?} is not a finite number",
+                    i + 1
+                ));
+            }
+        }
+        if problems.len() > 10 {
+            problems.push("samples.csv: more problems not listed".to_owned());
+            break;
+        }
+    }
+    if rows == 0 {
+        problems.push("samples.csv has no rows".to_owned());
+    }
+    problems
+}
+
+fn sci(v: f64) -> String {
+    format!("{v:.2e}")
+}
+
+/// The table of cases, then each case's stated reason and where its references stop
+/// applying, then any output problem.
+pub fn table(cases: &[Case]) -> String {
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
+        "{:<20} {:<10} {:>10} {:>10} {:>10} {:>9} {:>10}  references stop applying",
+        "case", "outcome", "joint m", "penetr. m", "E drift", "wall s", "spin rad/s"
+    );
+    for c in cases {
+        let (gap, pen, drift, wall, spin, limits) = match &c.report {
+            Some(r) => (
+                sci(r.max_joint_gap_m),
+                sci(r.max_penetration_m),
+                format!("{:+.1e}", r.max_energy_rise_rel),
+                format!("{:.2}", r.wall_time_s),
+                sci(r.max_spin_rad_s),
+                r.reference_limits
+                    .iter()
+                    .map(|l| match l.t_s {
+                        Some(_) => format!("{} (r={:.2e})", label(l.kind), l.r_m),
+                        None => format!("{} (not reached)", label(l.kind)),
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            ),
+            None => Default::default(),
+        };
+        let dash = |s: String| if s.is_empty() { "-".to_owned() } else { s };
+        let _ = writeln!(
+            o,
+            "{:<20} {:<10} {:>10} {:>10} {:>10} {:>9} {:>10}  {}",
+            c.name,
+            c.outcome.word(),
+            dash(gap),
+            dash(pen),
+            dash(drift),
+            dash(wall),
+            dash(spin),
+            dash(limits)
+        );
+    }
+    let _ = writeln!(o);
+    let _ = writeln!(
+        o,
+        "joint m, penetr. m: largest joint separation and floor penetration; E drift: largest \
+         (E - E0)/E0 (0: the energy never rose); wall s: wall time of the engine steps; \
+         spin: fastest body spin."
+    );
+    for c in cases {
+        let _ = writeln!(
+            o,
+            "{}: {}: {}",
+            c.name,
+            c.outcome.word(),
+            c.outcome.reason()
+        );
+        for p in &c.output_problems {
+            let _ = writeln!(o, "{}: OUTPUT PROBLEM: {p}", c.name);
+        }
+    }
+    o
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(cells: &[&str]) -> String {
+        let mut v: Vec<String> = cells.iter().map(|s| (*s).to_owned()).collect();
+        v.resize(CSV_COLUMNS.len(), "1.0e0".to_owned());
+        v.join(",")
+    }
+
+    #[test]
+    fn sound_csv_has_no_problems() {
+        let text = format!(
+            "{}\n{}\n{}\n",
+            CSV_COLUMNS.join(","),
+            row(&[]),
+            row(&["", ""])
+        );
+        assert_eq!(csv_problems(&text), Vec::<String>::new());
+    }
+
+    #[test]
+    fn nan_short_row_and_empty_table_are_problems() {
+        let header = CSV_COLUMNS.join(",");
+        let p = csv_problems(&format!("{header}\n{}\n", row(&["NaN"])));
+        assert!(p.len() == 1 && p[0].contains("t_s = \"NaN\""), "{p:?}");
+        let p = csv_problems(&format!("{header}\n{}\n", row(&["0", "inf"])));
+        assert!(p.len() == 1 && p[0].contains("laid_fraction"), "{p:?}");
+        let p = csv_problems(&format!("{header}\n1,2,3\n"));
+        assert!(p.len() == 1 && p[0].contains("3 cells"), "{p:?}");
+        let p = csv_problems(&format!("{header}\n"));
+        assert_eq!(p, vec!["samples.csv has no rows".to_owned()]);
+        let p = csv_problems("a,b\n");
+        assert!(p[0].contains("header"), "{p:?}");
+    }
+
+    #[test]
+    fn only_optional_values_may_be_null() {
+        let v = serde_json::json!({
+            "geo_hop_fraction": null,
+            "milestones": [{"t_sim_s": null}],
+            "reference_limits": [{"t_s": null, "r_m": 1.0}],
+            "ledger": {"bang_time_s": null, "e0_j": null},
+            "max_joint_gap_m": null,
+        });
+        let mut nulls = Vec::new();
+        unexpected_nulls(&v, "", &mut nulls);
+        nulls.sort();
+        assert_eq!(nulls, vec!["ledger.e0_j", "max_joint_gap_m"]);
+    }
+}

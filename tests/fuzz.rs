@@ -1,0 +1,272 @@
+//! Property tests of scene loading: arbitrary text, mutated scene files and every key over
+//! wide ranges (zero, negative, NaN, infinities, huge and tiny values). Loading never
+//! panics, a rejection names a real key (or is a parse error), and every accepted scene
+//! keeps the invariants the model relies on. Case counts: see [`cases`].
+
+use std::f64::consts::PI;
+
+use proptest::prelude::*;
+use proptest::test_runner::FileFailurePersistence;
+use uncoil::scene::{Scene, SceneError};
+use uncoil::spiral::Spiral;
+
+/// Every key a scene may set, with its section.
+const KEYS: &[&str] = &[
+    "name",
+    "tape.outer_radius_m",
+    "tape.thickness_m",
+    "tape.mass_kg",
+    "tape.core_radius_m",
+    "discretisation.links_per_turn",
+    "floor.friction",
+    "gravity.g_m_s2",
+    "push.contact_speed_m_s",
+    "solver.max_dt_s",
+    "solver.steps_per_link",
+    "solver.iterations",
+    "solver.freeze_speed_m_s",
+    "stop.bang_radius_m",
+    "stop.max_time_s",
+    "stop.settle_time_s",
+    "output.sample_interval_s",
+];
+
+const YOGA: &str = include_str!("../scenes/yoga-mat.toml");
+
+/// Loads `text`; panics (failing the property) only through the invariant checks.
+fn load_and_check(text: &str) -> Result<(), TestCaseError> {
+    match Scene::from_toml_str(text, "fuzz") {
+        Ok(scene) => check_invariants(&scene),
+        Err(SceneError::Invalid { key, value, rule }) => {
+            prop_assert!(
+                KEYS.contains(&key.as_str()),
+                "unknown key {key} in the error"
+            );
+            prop_assert!(!value.is_empty() && !rule.is_empty());
+            Ok(())
+        }
+        Err(SceneError::Parse { message, .. }) => {
+            prop_assert!(!message.is_empty());
+            Ok(())
+        }
+        Err(e @ SceneError::Read { .. }) => Err(TestCaseError::fail(format!("read error {e}"))),
+    }
+}
+
+/// The invariants an accepted scene guarantees (see `src/scene.rs`).
+fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
+    let t = &s.tape;
+    let all = [
+        t.outer_radius_m,
+        t.thickness_m,
+        t.mass_kg,
+        t.core_radius_m,
+        s.friction,
+        s.g_m_s2,
+        s.push_speed_m_s,
+        s.solver.max_dt_s,
+        s.solver.steps_per_link,
+        s.solver.freeze_speed_m_s,
+        s.stop.bang_radius_m,
+        s.stop.max_time_s,
+        s.stop.settle_time_s,
+        s.sample_interval_s,
+    ];
+    prop_assert!(
+        all.iter().all(|v| v.is_finite()),
+        "non-finite value in {s:?}"
+    );
+    let (r, b, core) = (t.outer_radius_m, t.thickness_m, t.core_radius_m);
+    prop_assert!((0.001..=100.0).contains(&r));
+    prop_assert!(b > 0.0 && b < r / 2.0);
+    prop_assert!(t.mass_kg > 0.0 && t.mass_kg <= 1e6);
+    prop_assert!(core >= 0.0 && core + 2.0 * b <= r);
+    prop_assert!((3..=4096).contains(&s.links_per_turn));
+    let n = f64::from(s.links_per_turn);
+    prop_assert!(
+        2.0 * PI * (r - b / 2.0) / n <= r,
+        "outer link longer than R"
+    );
+    prop_assert!((r - core - b) / b * n <= 1e6, "too many links");
+    prop_assert!(s.friction >= 0.0);
+    prop_assert!((0.0..=1000.0).contains(&s.g_m_s2));
+    prop_assert!(s.push_speed_m_s > 0.0 && s.push_speed_m_s <= 1000.0);
+    prop_assert!(s.solver.max_dt_s > 0.0 && s.solver.max_dt_s <= 0.1);
+    prop_assert!((1.0..=1000.0).contains(&s.solver.steps_per_link));
+    prop_assert!((1..=1000).contains(&s.solver.iterations));
+    prop_assert!(s.solver.freeze_speed_m_s >= 0.0);
+    prop_assert!(core < s.stop.bang_radius_m && s.stop.bang_radius_m < r);
+    prop_assert!(s.stop.max_time_s > 0.0 && s.stop.max_time_s <= 1e4);
+    prop_assert!(s.stop.settle_time_s >= 0.0 && s.sample_interval_s >= 0.0);
+    prop_assert!(!s.name.trim().is_empty());
+    // The geometry the model builds from it is finite and has at least one link per turn.
+    let spiral = Spiral::wound(r, b, core);
+    prop_assert!(spiral.length().is_finite() && spiral.length() > 0.0);
+    let nodes = spiral.link_nodes(s.links_per_turn);
+    prop_assert!(nodes.len() >= 2 && nodes.iter().all(|p| p.is_finite()));
+    Ok(())
+}
+
+/// A value for a float key: mostly the yoga mat's `valid` value (so that later rules are
+/// reached), else ordinary magnitudes of either sign, zero, and the edges of f64.
+fn float_value(valid: &'static str) -> impl Strategy<Value = String> {
+    prop_oneof![
+        12 => Just(valid.to_owned()),
+        1 => (-12i32..4, 1.0f64..10.0, any::<bool>())
+            .prop_map(|(e, m, neg)| format!("{}{m}e{e}", if neg { "-" } else { "" })),
+        1 => prop::sample::select(vec![
+            "0.0", "-0.0", "nan", "-nan", "inf", "-inf", "1e308", "-1e308", "5e-324", "1.7976931348623157e308",
+            "0", "1", "-1", "32", "\"1.0\"", "true", "[1.0]", "{ a = 1 }",
+        ])
+        .prop_map(str::to_owned),
+    ]
+}
+
+/// A value for an integer key: mostly `valid`, else any count or a wrong form.
+fn int_value(valid: &'static str) -> impl Strategy<Value = String> {
+    prop_oneof![
+        12 => Just(valid.to_owned()),
+        1 => (-10i64..5000).prop_map(|v| v.to_string()),
+        1 => prop::sample::select(vec![
+            "0", "-1", "4096", "4097", "9223372036854775807", "-9223372036854775808",
+            "99999999999999999999", "3.0", "\"7\"", "nan",
+        ])
+        .prop_map(str::to_owned),
+    ]
+}
+
+/// A scene with every key set (each one left out with some probability).
+fn scene_text() -> impl Strategy<Value = String> {
+    let floats: Vec<_> = [
+        "0.06", "0.005", "1.5", "0.0", "1.0", "9.81", "0.3", "0.001", "4.0", "0.001", "0.005",
+        "60.0", "0.05", "0.001",
+    ]
+    .into_iter()
+    .map(float_value)
+    .collect();
+    let ints = vec![int_value("32"), int_value("4")];
+    let present = prop::collection::vec(prop::bool::weighted(0.85), 16);
+    let model = prop_oneof![
+        8 => Just("\"spiral\""),
+        1 => prop::sample::select(vec!["\"bristle\"", "1"]),
+    ];
+    (floats, ints, present, model).prop_map(|(f, i, p, model)| {
+        let keys: [(&str, &str, &String); 16] = [
+            ("tape", "outer_radius_m", &f[0]),
+            ("tape", "thickness_m", &f[1]),
+            ("tape", "mass_kg", &f[2]),
+            ("tape", "core_radius_m", &f[3]),
+            ("discretisation", "links_per_turn", &i[0]),
+            ("floor", "friction", &f[4]),
+            ("gravity", "g_m_s2", &f[5]),
+            ("push", "contact_speed_m_s", &f[6]),
+            ("solver", "max_dt_s", &f[7]),
+            ("solver", "steps_per_link", &f[8]),
+            ("solver", "iterations", &i[1]),
+            ("solver", "freeze_speed_m_s", &f[9]),
+            ("stop", "bang_radius_m", &f[10]),
+            ("stop", "max_time_s", &f[11]),
+            ("stop", "settle_time_s", &f[12]),
+            ("output", "sample_interval_s", &f[13]),
+        ];
+        let mut text = String::new();
+        let mut section = "";
+        for ((sec, key, value), on) in keys.iter().zip(p) {
+            if *sec != section {
+                text.push_str(&format!("[{sec}]\n"));
+                section = sec;
+            }
+            if on {
+                text.push_str(&format!("{key} = {value}\n"));
+            }
+        }
+        text.push_str(&format!("[contact]\nmodel = {model}\n"));
+        text
+    })
+}
+
+/// A physically plausible scene: every value inside its range, so that the geometric
+/// rules (b < R/2, core + 2b <= R, link length, link count, bang radius) decide.
+fn plausible_scene_text() -> impl Strategy<Value = String> {
+    (
+        0.001f64..100.0,
+        1e-6f64..0.6,
+        0.0f64..1.0,
+        1u32..64,
+        prop::option::of(0.0f64..1.0),
+    )
+        .prop_map(|(r, b_over_r, core_frac, n, bang_frac)| {
+            let b = r * b_over_r;
+            let core = core_frac * (r - 2.0 * b).max(0.0);
+            let mut text = format!(
+                "[tape]\nouter_radius_m = {r:e}\nthickness_m = {b:e}\nmass_kg = 1.0\n\
+                 core_radius_m = {core:e}\n[discretisation]\nlinks_per_turn = {n}\n\
+                 [push]\ncontact_speed_m_s = 0.3\n"
+            );
+            if let Some(k) = bang_frac {
+                text.push_str(&format!(
+                    "[stop]\nbang_radius_m = {:e}\n",
+                    core + k * (r - core)
+                ));
+            }
+            text
+        })
+}
+
+/// The yoga mat's file with one edit: a byte range replaced by arbitrary text.
+fn mutated_scene() -> impl Strategy<Value = String> {
+    (0..YOGA.len(), 0usize..40, ".{0,12}").prop_map(|(at, len, insert)| {
+        let mut at = at;
+        while !YOGA.is_char_boundary(at) {
+            at -= 1;
+        }
+        let mut end = (at + len).min(YOGA.len());
+        while !YOGA.is_char_boundary(end) {
+            end -= 1;
+        }
+        format!("{}{insert}{}", &YOGA[..at], &YOGA[end..])
+    })
+}
+
+/// Cases per property: `PROPTEST_CASES` if set, else 2000 (10,000 in all, about a second).
+fn cases() -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(2000)
+}
+
+proptest! {
+    // Failing cases are kept in proptest-regressions/fuzz.txt (commit it) and rerun first.
+    #![proptest_config(ProptestConfig {
+        failure_persistence: Some(Box::new(FileFailurePersistence::Direct(
+            "proptest-regressions/fuzz.txt",
+        ))),
+        ..ProptestConfig::with_cases(cases())
+    })]
+
+    #[test]
+    fn arbitrary_text_never_panics(text in any::<String>()) {
+        load_and_check(&text)?;
+    }
+
+    #[test]
+    fn toml_like_text_never_panics(text in "([a-z_\\[\\]]{0,12} ?= ?[-0-9.e+naif\"]{0,10}\n){0,12}") {
+        load_and_check(&text)?;
+    }
+
+    #[test]
+    fn mutated_scene_never_panics(text in mutated_scene()) {
+        load_and_check(&text)?;
+    }
+
+    #[test]
+    fn every_key_over_wide_ranges(text in scene_text()) {
+        load_and_check(&text)?;
+    }
+
+    #[test]
+    fn plausible_geometry_accepted_scenes_keep_their_invariants(text in plausible_scene_text()) {
+        load_and_check(&text)?;
+    }
+}
