@@ -203,7 +203,12 @@ pub struct Model {
     max_dt: f64,
     freeze_speed: f64,
     friction: f64,
+    /// Gravity across the floor, `g cos(alpha)`, pulling towards it (m/s^2).
     g: f64,
+    /// Gravity along the floor, `g sin(alpha)`, towards +x (m/s^2); 0 on a level floor.
+    g_along: f64,
+    /// First moment `sum m_k x_k` of the tape lying flat from `x = 0` (kg m).
+    flat_first_moment: f64,
     half_b: f64,
     bang_fraction: f64,
     settle_time: f64,
@@ -265,7 +270,10 @@ impl Model {
         }
 
         let mut world = PhysicsWorld::new();
-        world.gravity = Vector::new(0.0, -scene.g_m_s2);
+        // A slope tilts gravity in the simulation frame; the floor stays the plane y = b/2.
+        let (sin_a, cos_a) = scene.slope_deg.to_radians().sin_cos();
+        let (g_along, g_perp) = (scene.g_m_s2 * sin_a, scene.g_m_s2 * cos_a);
+        world.gravity = Vector::new(g_along, -g_perp);
         let ip = &mut world.integration_parameters;
         ip.num_solver_iterations = scene.solver.iterations as usize;
         // The engine's tolerances (contact prediction, corrective speed) are fractions of
@@ -321,6 +329,22 @@ impl Model {
         world.bodies[coil].recompute_mass_properties_from_colliders(&world.colliders);
 
         let bang_r = scene.stop.bang_radius_m;
+        let bang_fraction = if tape.core_radius_m > 0.0 {
+            // On a core the mass is not spread over a disc: use the spiral's own laid
+            // fraction at the midline radius bang_r.
+            let psi = spiral
+                .psi_at_radius(bang_r)
+                .clamp(spiral.psi_in, spiral.psi_out);
+            1.0 - moments.at(psi)[0] / spiral.length()
+        } else {
+            1.0 - (bang_r / tape.outer_radius_m).powi(2)
+        };
+        let mut laid_x = 0.0;
+        let mut flat_first_moment = 0.0;
+        for link in &links {
+            flat_first_moment += link.mass_kg * (laid_x + 0.5 * link.length_m);
+            laid_x += link.length_m;
+        }
         let mut model = Self {
             world,
             spiral,
@@ -331,9 +355,11 @@ impl Model {
             max_dt: scene.solver.max_dt_s,
             freeze_speed: scene.solver.freeze_speed_m_s,
             friction: scene.friction,
-            g: scene.g_m_s2,
+            g: g_perp,
+            g_along,
+            flat_first_moment,
             half_b: 0.5 * b,
-            bang_fraction: 1.0 - (bang_r / tape.outer_radius_m).powi(2),
+            bang_fraction,
             settle_time: scene.stop.settle_time_s,
             total_mass: tape.mass_kg,
             ground,
@@ -399,9 +425,15 @@ impl Model {
                 continue;
             }
             kinetic += body.kinetic_energy();
-            potential += body.mass() * self.g * body.center_of_mass().y;
+            potential += self.potential_of(body);
         }
         (kinetic, potential)
+    }
+
+    /// Potential energy `-m g.p` of one body, gravity tilted on a slope (J).
+    fn potential_of(&self, body: &RigidBody) -> f64 {
+        let c = body.center_of_mass();
+        body.mass() * self.g * c.y - body.mass() * self.g_along * c.x
     }
 
     fn total_energy(&self) -> f64 {
@@ -675,7 +707,7 @@ impl Model {
                 break;
             }
             let kinetic = body.kinetic_energy();
-            self.frozen_potential_j += body.mass() * self.g * body.center_of_mass().y;
+            self.frozen_potential_j += self.potential_of(body);
             self.world.remove_body(oldest.body);
             self.free.pop_front();
             if let Some(next) = self.free.front().copied() {
@@ -769,9 +801,9 @@ impl Model {
         }
     }
 
-    /// Potential energy of the tape lying flat, midline at `b/2` (J).
+    /// Potential energy of the tape lying flat, midline at `b/2`, from `x = 0` on (J).
     pub fn flat_potential_j(&self) -> f64 {
-        self.total_mass * self.g * self.half_b
+        self.total_mass * self.g * self.half_b - self.g_along * self.flat_first_moment
     }
 }
 

@@ -56,14 +56,14 @@ pub struct RefState {
 /// `q` falls monotonically from `q0`; the grid is uniform in `u = sqrt(q0 - q)`, so a start
 /// from rest (`|q'| ~ sqrt(q0 - q)`) is integrated without loss of order.
 #[derive(Debug, Clone)]
-struct Trajectory {
+pub(crate) struct Trajectory {
     q0: f64,
     /// `(u, t, dt/du)` at each node.
     nodes: Vec<[f64; 3]>,
 }
 
 impl Trajectory {
-    fn new(q0: f64, q_end: f64, panels: usize, rate: impl Fn(f64) -> f64) -> Self {
+    pub(crate) fn new(q0: f64, q_end: f64, panels: usize, rate: impl Fn(f64) -> f64) -> Self {
         let u_end = (q0 - q_end).max(0.0).sqrt();
         #[allow(clippy::cast_precision_loss)]
         let du = u_end / panels as f64;
@@ -90,7 +90,7 @@ impl Trajectory {
     }
 
     /// Time at which `q` is reached, `None` beyond the tabulated end.
-    fn time_at(&self, q: f64) -> Option<f64> {
+    pub(crate) fn time_at(&self, q: f64) -> Option<f64> {
         if q > self.q0 || q < self.q_end() {
             return None;
         }
@@ -104,7 +104,7 @@ impl Trajectory {
     }
 
     /// `q` at time `t`, `None` beyond the tabulated end.
-    fn q_at(&self, t: f64) -> Option<f64> {
+    pub(crate) fn q_at(&self, t: f64) -> Option<f64> {
         if t < 0.0 || t > self.duration() {
             return None;
         }
@@ -330,9 +330,20 @@ impl ForceTorque {
 /// ```
 /// `I_P` is the coil's moment of inertia about the peel point. This model differs from the
 /// continuum (7) at first order in `b/R`.
+///
+/// On a slope of angle `alpha` (positive when +x is downhill, App. B) gravity is tilted,
+/// `g = g (sin alpha, -cos alpha)`, and the potential energy is `-m g.p` of the coil and of the
+/// laid tape, which lies from `x = 0` to the peel point `x = s(psi)` (the laid arc length):
+/// ```text
+/// V = g cos(alpha) [m y_cm + (M - m) b / 2] - g sin(alpha) [m x_cm + lambda s^2 / 2]
+/// ```
 #[derive(Debug, Clone)]
 pub struct ExactGeometry {
     p: Params,
+    /// `g sin(alpha)`, along +x (m/s^2).
+    g_along: f64,
+    /// `g cos(alpha)`, towards the floor (m/s^2).
+    g_perp: f64,
     spiral: Spiral,
     moments: SpiralMoments,
     line_density_kg_m: f64,
@@ -348,17 +359,29 @@ struct Pose {
     inertia_peel: f64,
     /// Height of the coil's centre of mass (m).
     y_cm: f64,
+    /// Horizontal position of the coil's centre of mass, from the tape's outer end (m).
+    x_cm: f64,
+    /// Laid length, the peel point's x (m).
+    laid_m: f64,
 }
 
 impl ExactGeometry {
     /// Tabulates the model from the full coil down to the parameter where the continuum
     /// equivalent radius `R sqrt(1 - f)` reaches `r_end_m`.
     pub fn new(p: Params, r_end_m: f64) -> Self {
+        Self::on_slope(p, 0.0, r_end_m)
+    }
+
+    /// As [`Self::new`], on a floor sloping by `slope_rad` (positive: +x downhill).
+    pub fn on_slope(p: Params, slope_rad: f64, r_end_m: f64) -> Self {
         let spiral = Spiral::wound(p.outer_radius_m, p.thickness_m, p.core_radius_m);
         let moments = SpiralMoments::new(spiral);
         let line_density_kg_m = p.mass_kg / spiral.length();
+        let (sin_a, cos_a) = slope_rad.sin_cos();
         let mut model = Self {
             p,
+            g_along: p.g_m_s2 * sin_a,
+            g_perp: p.g_m_s2 * cos_a,
             spiral,
             moments,
             line_density_kg_m,
@@ -402,16 +425,24 @@ impl ExactGeometry {
         } else {
             [0.0, 0.0]
         };
+        let laid_m = self.spiral.arc(psi, self.spiral.psi_out);
         Pose {
             mass_kg,
             inertia_peel,
             y_cm: 0.5 * self.p.thickness_m + rel[1],
+            x_cm: laid_m + rel[0],
+            laid_m,
         }
     }
 
     fn potential(&self, _psi: f64, pose: &Pose) -> f64 {
-        let g = self.p.g_m_s2;
-        g * (pose.mass_kg * pose.y_cm + (self.p.mass_kg - pose.mass_kg) * 0.5 * self.p.thickness_m)
+        let g = self.g_perp;
+        let across = g
+            * (pose.mass_kg * pose.y_cm
+                + (self.p.mass_kg - pose.mass_kg) * 0.5 * self.p.thickness_m);
+        let along =
+            pose.mass_kg * pose.x_cm + 0.5 * self.line_density_kg_m * pose.laid_m * pose.laid_m;
+        across - self.g_along * along
     }
 
     /// `|psi'|` from the energy integral (rad/s).
@@ -484,7 +515,7 @@ impl ExactGeometry {
             -self.pose(q).mass_kg * dy * self.psidot(q)
         };
         let dp_dpsi = (momentum(psi + h) - momentum(psi - h)) / (2.0 * h);
-        self.pose(psi).mass_kg * self.p.g_m_s2 - self.psidot(psi) * dp_dpsi
+        self.pose(psi).mass_kg * self.g_perp - self.psidot(psi) * dp_dpsi
     }
 
     /// The first laid fraction at which the rolling spiral would need a floor that pulls

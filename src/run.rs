@@ -190,7 +190,7 @@ impl References {
         Self {
             continuum: Continuum::new(p, r_end),
             force_torque: ForceTorque::new(p),
-            exact: ExactGeometry::new(p, r_end),
+            exact: ExactGeometry::on_slope(p, scene.slope_deg.to_radians(), r_end),
         }
     }
 }

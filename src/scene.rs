@@ -45,6 +45,8 @@ const MAX_G_M_S2: f64 = 1000.0;
 const MAX_CONTACT_SPEED_M_S: f64 = 1000.0;
 /// Upper bound of `solver.max_dt_s` (s).
 const MAX_MAX_DT_S: f64 = 0.1;
+/// Bound of `floor.slope_deg` (degrees, either sign).
+const MAX_SLOPE_DEG: f64 = 45.0;
 
 /// Why a scene could not be loaded.
 #[derive(Debug, thiserror::Error)]
@@ -140,6 +142,10 @@ pub struct Scene {
     pub links_per_turn: u32,
     /// Coulomb friction coefficient between tape and floor, dimensionless (default: 1.0).
     pub friction: f64,
+    /// Slope of the floor, degrees, positive when the rolling direction (+x) is downhill
+    /// (default: 0.0). The floor stays the plane `y = 0` of the simulation frame and gravity
+    /// is tilted instead: `g = g (sin alpha, -cos alpha)`.
+    pub slope_deg: f64,
     /// Gravitational acceleration, m/s² (default: 9.81).
     pub g_m_s2: f64,
     /// Initial speed of the contact line, m/s (default: 0.0, which is rejected: a scene
@@ -212,12 +218,14 @@ impl Default for DiscretisationFile {
 #[serde(deny_unknown_fields, default)]
 struct FloorFile {
     friction: f64,
+    slope_deg: f64,
 }
 
 impl Default for FloorFile {
     fn default() -> Self {
         Self {
             friction: DEFAULT_FRICTION,
+            slope_deg: 0.0,
         }
     }
 }
@@ -444,6 +452,13 @@ impl Scene {
             file.floor.friction >= 0.0,
             "must be >= 0",
         )?;
+        let slope = file.floor.slope_deg;
+        let slope_deg = check(
+            "floor.slope_deg",
+            slope,
+            slope.abs() < MAX_SLOPE_DEG,
+            format!("must be > -{MAX_SLOPE_DEG} and < {MAX_SLOPE_DEG}"),
+        )?;
         let g = file.gravity.g_m_s2;
         let g = check(
             "gravity.g_m_s2",
@@ -541,6 +556,7 @@ impl Scene {
             tape,
             links_per_turn,
             friction,
+            slope_deg,
             g_m_s2: g,
             push_speed_m_s: push,
             solver,
@@ -815,6 +831,8 @@ contact_speed_m_s = 0.3
             ("discretisation", "links_per_turn", "4097"),
             ("discretisation", "links_per_turn", "5"),
             ("floor", "friction", "-0.1"),
+            ("floor", "slope_deg", "45.0"),
+            ("floor", "slope_deg", "-45.0"),
             ("gravity", "g_m_s2", "-9.81"),
             ("gravity", "g_m_s2", "1000.1"),
             ("push", "contact_speed_m_s", "-0.3"),
@@ -844,6 +862,8 @@ contact_speed_m_s = 0.3
             ("tape", "core_radius_m", "0.0499"),
             ("discretisation", "links_per_turn", "4096"),
             ("floor", "friction", "0.0"),
+            ("floor", "slope_deg", "44.9"),
+            ("floor", "slope_deg", "-44.9"),
             ("gravity", "g_m_s2", "0.0"),
             ("gravity", "g_m_s2", "1000.0"),
             ("push", "contact_speed_m_s", "1000.0"),
