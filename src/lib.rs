@@ -6,9 +6,11 @@
 //! [`reference`](mod@reference) (pure `f64`) -> [`run`] (loop, samples, report) -> [`output`] (files and
 //! the summary).
 
+pub mod compare;
 pub mod model;
 pub mod output;
 pub mod reference;
+pub mod rivals;
 pub mod run;
 pub mod scene;
 pub mod spiral;

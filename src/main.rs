@@ -1,4 +1,4 @@
-//! The `uncoil` command line: `uncoil run SCENE [--out DIR]`.
+//! The `uncoil` command line: `uncoil run SCENE [--out DIR]`, `uncoil compare SCENE...`.
 //!
 //! Results go to stdout, diagnostics to stderr. Exit codes: 0 success, 1 a failure during
 //! the run (e.g. an output file could not be written), 2 bad input (scene or usage).
@@ -34,6 +34,13 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Run scenes and print the paradox table: milestone times of the simulation and of
+    /// every competing equation of motion for each scene, as markdown.
+    Compare {
+        /// The scene files (TOML), e.g. scenes/*.toml.
+        #[arg(required = true)]
+        scenes: Vec<PathBuf>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -58,7 +65,34 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Command::Compare { scenes } => compare(&scenes),
     }
+}
+
+/// Loads every scene first (a bad one fails before anything runs), then runs each and
+/// prints its table as soon as it is done.
+fn compare(paths: &[PathBuf]) -> ExitCode {
+    let mut scenes = Vec::with_capacity(paths.len());
+    for path in paths {
+        match Scene::from_file(path) {
+            Ok(s) => scenes.push(s),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(2);
+            }
+        }
+    }
+    for scene in &scenes {
+        eprintln!("running {} ...", scene.name);
+        match run(scene, &mut []) {
+            Ok(report) => println!("{}", uncoil::compare::table(&report)),
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                return ExitCode::from(1);
+            }
+        }
+    }
+    ExitCode::SUCCESS
 }
 
 fn run_scene(scene: &Scene, out: Option<PathBuf>) -> anyhow::Result<String> {

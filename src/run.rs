@@ -150,7 +150,7 @@ pub struct RunReport {
     pub sim_time_s: f64,
     /// Why the run stopped.
     pub stop_reason: String,
-    /// Milestones at 0.75R, 0.5R, 0.25R, 0.1R and 2b.
+    /// Milestones at 0.75R, 0.5R, 0.25R, 0.1R and 2b (a spool: at laid fractions 0.25 to 0.9).
     pub milestones: Vec<Milestone>,
     /// The energy ledger.
     pub ledger: Ledger,
@@ -207,9 +207,20 @@ pub fn params(scene: &Scene) -> Params {
     }
 }
 
+/// Laid fractions of the milestones of a spool (a scene with a core).
+pub const SPOOL_FRACTIONS: [f64; 4] = [0.25, 0.5, 0.75, 0.9];
+
 /// The milestone radii of a scene with their labels.
 pub fn milestone_radii(scene: &Scene) -> Vec<(String, f64)> {
     let big_r = scene.tape.outer_radius_m;
+    if scene.tape.core_radius_m > 0.0 {
+        // On a spool the radius hardly changes: milestones at laid fractions f, given as
+        // the continuum-equivalent radius R sqrt(1 - f) the loop converts back.
+        return SPOOL_FRACTIONS
+            .iter()
+            .map(|f| (format!("f={f}"), big_r * (1.0 - f).sqrt()))
+            .collect();
+    }
     let mut v: Vec<(String, f64)> = [0.75, 0.5, 0.25, 0.1]
         .iter()
         .map(|k| (format!("{k}R"), k * big_r))
