@@ -304,7 +304,12 @@ impl Model {
         let psi_low = spiral.psi_out;
         let coil_angle = spiral.rotation_with_bottom_at(psi_low);
         let p = rotate(spiral.point(psi_low), coil_angle);
-        let origin = [-p[0], 0.5 * b - p[1]];
+        // The contact ball is shrunk by the outer link's chord/arc ratio (see `refit_ball`):
+        // start it resting on the floor, not hovering by the shrinkage, which would drop the
+        // coil in the first steps and turn M g rho_c (1 - chord/arc) into kinetic energy.
+        let chord_ratio = links[0].chord_ratio;
+        let sink = spiral.curvature_radius(psi_low) * (1.0 - chord_ratio);
+        let origin = [-p[0], 0.5 * b - p[1] - sink];
         let mprops = coil_sums.mass_properties();
         // Rolling about the peel point at the pushed contact-line speed: x' = omega rho_c.
         let omega = -scene.push_speed_m_s / spiral.curvature_radius(psi_low);
@@ -321,7 +326,7 @@ impl Model {
                 .can_sleep(false),
         );
         let coil_ball = world.insert_collider(
-            Self::ball_builder(&spiral, psi_low, scene.friction),
+            Self::ball_builder(&spiral, psi_low, chord_ratio, scene.friction),
             Some(coil),
         );
         // The engine computes mass properties lazily at the next step; energies are read
@@ -391,9 +396,9 @@ impl Model {
     }
 
     /// The coil's contact: the osculating circle of the midline at its lowest point.
-    fn ball_builder(spiral: &Spiral, psi: f64, friction: f64) -> ColliderBuilder {
+    fn ball_builder(spiral: &Spiral, psi: f64, chord_ratio: f64, friction: f64) -> ColliderBuilder {
         let c = spiral.curvature_centre(psi);
-        ColliderBuilder::ball(spiral.curvature_radius(psi))
+        ColliderBuilder::ball(spiral.curvature_radius(psi) * chord_ratio)
             .density(0.0)
             .friction(friction)
             .position(Pose::from_translation(Vector::new(c[0], c[1])))
@@ -628,6 +633,11 @@ impl Model {
             self.unpin_from_coil(prev.body, coil);
         }
         self.join_near_node(k, handle);
+        if k == 0 {
+            // The tape's outer end rests on the floor from the start: nothing else holds
+            // it, and without a floor contact it would swing down through the floor.
+            self.lay_link(k, handle);
+        }
         self.free.push_back(FreeLink {
             index: k,
             body: handle,

@@ -374,6 +374,12 @@ impl ExactGeometry {
 
     /// As [`Self::new`], on a floor sloping by `slope_rad` (positive: +x downhill).
     pub fn on_slope(p: Params, slope_rad: f64, r_end_m: f64) -> Self {
+        Self::to_fraction(p, slope_rad, 1.0 - (r_end_m / p.outer_radius_m).powi(2))
+    }
+
+    /// As [`Self::on_slope`], tabulated up to the laid fraction `f_end` (for a spool, whose
+    /// laid fraction is not `1 - (r/R)^2`).
+    pub fn to_fraction(p: Params, slope_rad: f64, f_end: f64) -> Self {
         let spiral = Spiral::wound(p.outer_radius_m, p.thickness_m, p.core_radius_m);
         let moments = SpiralMoments::new(spiral);
         let line_density_kg_m = p.mass_kg / spiral.length();
@@ -396,7 +402,7 @@ impl ExactGeometry {
         let pose0 = model.pose(psi0);
         let w0 = Spiral::turn_rate(psi0) * psidot0;
         model.energy_j = 0.5 * pose0.inertia_peel * w0 * w0 + model.potential(psi0, &pose0);
-        let psi_end = model.psi_at_fraction(1.0 - (r_end_m / p.outer_radius_m).powi(2));
+        let psi_end = model.psi_at_fraction(f_end);
         let traj = Trajectory::new(psi0, psi_end, 6000, |psi| model.psidot(psi));
         model.traj = traj;
         model

@@ -11,8 +11,8 @@ use std::f64::consts::PI;
 
 use serde::Serialize;
 
-use crate::reference::{Continuum, ExactGeometry, ForceTorque, Params, Trajectory};
-use crate::run::params;
+use crate::reference::{Continuum, ForceTorque, Params, Trajectory};
+use crate::run::{exact_geometry, params};
 use crate::scene::Scene;
 use crate::spiral::Spiral;
 
@@ -183,11 +183,7 @@ fn closed(
 
 /// The exact-geometry model of the scene's spiral (on its slope), as a rival.
 fn exact(scene: &Scene, valid: bool) -> Rival {
-    let e = ExactGeometry::on_slope(
-        params(scene),
-        scene.slope_deg.to_radians(),
-        0.5 * scene.stop.bang_radius_m,
-    );
+    let e = exact_geometry(scene);
     closed(
         "exact",
         "exact geometry: the rigid spiral the links form, rolling on its midline, energy conserved",
@@ -597,5 +593,26 @@ mod tests {
         assert!(eq68.time_at_fraction(0.5).is_none());
         let eq72 = rv.iter().find(|r| r.label == "eq.72 A11").unwrap();
         assert!(eq72.stall_fraction.is_none());
+    }
+}
+#[cfg(test)]
+mod scratch {
+    use super::*;
+    #[test]
+    fn scratch_single() {
+        for b in [1e-4, 1e-5] {
+            let r = 0.05;
+            let text = format!("[tape]\nouter_radius_m = {}\nthickness_m = {b}\nmass_kg = 0.05\ncore_radius_m = {}\n[push]\ncontact_speed_m_s = 0.025\n[stop]\nbang_radius_m = {}\n", r + b, r - b, r - b / 2.0 + 0.03 * b);
+            let s = Scene::from_toml_str(&text, "x").unwrap();
+            let p = params(&s);
+            let e = ExactGeometry::on_slope(p, 0.0, 0.5*(r-b));
+            let rv = rivals(&s);
+            for f in [0.01, 0.1, 0.25, 0.5] {
+                let ts: Vec<_> = rv.iter().map(|x| x.time_at_fraction(f)).collect();
+                let psi = e.psi_at_fraction(f);
+                let st = e.state_at_psi(psi, 0.0);
+                println!("b {b} f {f}: {ts:?} exact omega {} x {} ke {} pe {}", st.omega_rad_s, st.x_m, st.kinetic_j, st.potential_j);
+            }
+        }
     }
 }

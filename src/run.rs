@@ -190,8 +190,19 @@ impl References {
         Self {
             continuum: Continuum::new(p, r_end),
             force_torque: ForceTorque::new(p),
-            exact: ExactGeometry::on_slope(p, scene.slope_deg.to_radians(), r_end),
+            exact: exact_geometry(scene),
         }
+    }
+}
+
+/// The exact-geometry model of a scene, on its slope, tabulated to half the bang radius (a
+/// solid coil) or to 99.5 % laid (a spool).
+pub fn exact_geometry(scene: &Scene) -> ExactGeometry {
+    let (p, slope) = (params(scene), scene.slope_deg.to_radians());
+    if scene.tape.core_radius_m > 0.0 {
+        ExactGeometry::to_fraction(p, slope, 0.995)
+    } else {
+        ExactGeometry::on_slope(p, slope, 0.5 * scene.stop.bang_radius_m)
     }
 }
 
