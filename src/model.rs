@@ -316,7 +316,13 @@ impl Model {
         let com_local = mprops.local_com;
         let com = rotate([com_local.x, com_local.y], coil_angle);
         let rel = [origin[0] + com[0], origin[1] + com[1] - 0.5 * b];
-        let linvel = Vector::new(-omega * rel[1], omega * rel[0]);
+        // Without friction nothing can make it roll: it starts spinning in place (App. D),
+        // its surface moving at the push speed.
+        let linvel = if scene.friction > 0.0 {
+            Vector::new(-omega * rel[1], omega * rel[0])
+        } else {
+            Vector::ZERO
+        };
         let coil = world.insert_body(
             RigidBodyBuilder::dynamic()
                 .pose(Pose::new(Vector::new(origin[0], origin[1]), coil_angle))

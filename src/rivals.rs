@@ -599,20 +599,25 @@ mod tests {
 mod scratch {
     use super::*;
     #[test]
-    fn scratch_single() {
-        for b in [1e-4, 1e-5] {
-            let r = 0.05;
-            let text = format!("[tape]\nouter_radius_m = {}\nthickness_m = {b}\nmass_kg = 0.05\ncore_radius_m = {}\n[push]\ncontact_speed_m_s = 0.025\n[stop]\nbang_radius_m = {}\n", r + b, r - b, r - b / 2.0 + 0.03 * b);
+    fn scratch_spool() {
+        let (r, b) = (0.02, 2e-6);
+        for n in [39.0, 39.25, 39.5, 39.75, 39.79, 40.0] {
+            let d = n * b;
+            let text = format!(
+                "[tape]\nouter_radius_m = {}\nthickness_m = {b}\nmass_kg = 0.1\ncore_radius_m = {}\n[push]\ncontact_speed_m_s = 2e-5\n[stop]\nbang_radius_m = {}\n",
+                r + b / 2.0 + d / 2.0,
+                r - b / 2.0 - d / 2.0,
+                r - d / 2.0 + 0.03 * d
+            );
             let s = Scene::from_toml_str(&text, "x").unwrap();
-            let p = params(&s);
-            let e = ExactGeometry::on_slope(p, 0.0, 0.5*(r-b));
             let rv = rivals(&s);
-            for f in [0.01, 0.1, 0.25, 0.5] {
-                let ts: Vec<_> = rv.iter().map(|x| x.time_at_fraction(f)).collect();
-                let psi = e.psi_at_fraction(f);
-                let st = e.state_at_psi(psi, 0.0);
-                println!("b {b} f {f}: {ts:?} exact omega {} x {} ke {} pe {}", st.omega_rad_s, st.x_m, st.kinetic_j, st.potential_j);
-            }
+            let e = rv.iter().find(|x| x.label == "exact").unwrap();
+            let c = rv.iter().find(|x| x.label == "eq.79").unwrap();
+            let v: Vec<_> = [0.25, 0.5, 0.9]
+                .iter()
+                .map(|&f| e.time_at_fraction(f).unwrap() / c.time_at_fraction(f).unwrap() - 1.0)
+                .collect();
+            println!("N {n}: exact/eq79-1 {v:?}");
         }
     }
 }
