@@ -4,8 +4,122 @@
 
 use std::fmt::Write as _;
 
+use crate::forces::{force_reference, sign_change_fraction};
 use crate::rivals::{Case, Rival, rivals};
-use crate::run::RunReport;
+use crate::run::{Observer, RunReport, Sample};
+use crate::scene::Scene;
+
+/// Keeps the samples of a run, for the force table.
+#[derive(Debug, Default)]
+pub struct SampleLog {
+    /// Every sample, in order.
+    pub samples: Vec<Sample>,
+}
+
+impl Observer for SampleLog {
+    fn observe_init(&mut self, _scene: &Scene) -> anyhow::Result<()> {
+        Ok(())
+    }
+    fn observe_sample(&mut self, sample: &Sample) -> anyhow::Result<()> {
+        self.samples.push(*sample);
+        Ok(())
+    }
+    fn observe_final(&mut self, _report: &RunReport) -> anyhow::Result<()> {
+        Ok(())
+    }
+}
+
+/// Laid fractions of the force table.
+const FORCE_FRACTIONS: [f64; 5] = [0.1, 0.25, 0.5, 0.75, 0.9];
+/// Half-width of the laid-fraction window the simulated forces are averaged over.
+const FORCE_WINDOW: f64 = 0.01;
+
+/// Mean of `value` over the rolling-phase samples with laid fraction within `half` of `f`.
+fn window_mean(
+    samples: &[Sample],
+    f: f64,
+    half: f64,
+    value: impl Fn(&Sample) -> f64,
+) -> Option<f64> {
+    let (mut sum, mut n) = (0.0, 0u32);
+    for s in samples
+        .iter()
+        .filter(|s| (s.laid_fraction - f).abs() <= half)
+    {
+        let v = value(s);
+        if v.is_finite() {
+            sum += v;
+            n += 1;
+        }
+    }
+    (n > 0).then(|| sum / f64::from(n))
+}
+
+/// The first laid fraction at which the simulated `F_tot`, averaged over windows of 0.02,
+/// changes sign.
+fn sim_sign_change(samples: &[Sample], f_max: f64) -> Option<f64> {
+    let mut prev: Option<(f64, f64)> = None;
+    let mut f = FORCE_WINDOW;
+    while f <= f_max {
+        if let Some(v) = window_mean(samples, f, FORCE_WINDOW, |s| s.f_tot_n) {
+            if let Some((f0, v0)) = prev
+                && v0.signum() != v.signum()
+            {
+                return Some(f0 + (f - f0) * v0 / (v0 - v));
+            }
+            prev = Some((f, v));
+        }
+        f += 2.0 * FORCE_WINDOW;
+    }
+    None
+}
+
+/// The constraint-force table of one run: the simulation's `N_tot`, `F_tot` (momentum
+/// balance) and floor contact forces beside the case's analytic forms.
+pub fn force_table(report: &RunReport, samples: &[Sample]) -> String {
+    let mut o = String::new();
+    let Some(forces) = force_reference(&report.scene) else {
+        let _ = writeln!(
+            o,
+            "Constraint forces: none analytic (frictionless floor: F = 0 by construction)."
+        );
+        return o;
+    };
+    let _ = writeln!(
+        o,
+        "| f | N_tot sim N | N_tot ref N | F_tot sim N | F_tot ref N | floor contact N, F (sim) N |"
+    );
+    let _ = writeln!(o, "|---|---|---|---|---|---|");
+    let show = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.4}"));
+    for f in FORCE_FRACTIONS {
+        let mean = |g: fn(&Sample) -> f64| window_mean(samples, f, FORCE_WINDOW, g);
+        let reference = forces(f);
+        let _ = writeln!(
+            o,
+            "| {f} | {} | {} | {} | {} | {}, {} |",
+            show(mean(|s| s.n_tot_n)),
+            show(reference.map(|r| r.0)),
+            show(mean(|s| s.f_tot_n)),
+            show(reference.map(|r| r.1)),
+            show(mean(|s| s.normal_n)),
+            show(mean(|s| s.friction_n)),
+        );
+    }
+    let last = report
+        .milestones
+        .iter()
+        .filter_map(|m| m.t_sim_s.map(|_| m.laid_fraction))
+        .fold(0.0, f64::max)
+        .min(0.95);
+    let _ = writeln!(
+        o,
+        "\nSimulated forces are averaged over laid fractions f +- {FORCE_WINDOW}. F_tot changes sign \
+         at f = {} in the simulation and at f = {} in the reference.",
+        show(sim_sign_change(samples, last)),
+        show(sign_change_fraction(&forces, last)),
+    );
+    o
+}
 
 /// `t / t_sim - 1` as a signed percentage, or a dash.
 fn rel(t: Option<f64>, t_sim: Option<f64>) -> String {
@@ -41,8 +155,8 @@ pub fn worst_error_vs_valid(report: &RunReport) -> Option<(String, f64)> {
     Some((valid.label.clone(), worst))
 }
 
-/// The markdown table of one scene's run against its rivals.
-pub fn table(report: &RunReport) -> String {
+/// The markdown table of one scene's run against its rivals, then its force table.
+pub fn table(report: &RunReport, samples: &[Sample]) -> String {
     let scene = &report.scene;
     let case = Case::of(scene);
     let rv = rivals(scene);
@@ -99,5 +213,7 @@ pub fn table(report: &RunReport) -> String {
         100.0 * l.lost_before_bang_j / l.e0_j,
         l.kinetic_into_bang_j
     );
+    let _ = writeln!(o);
+    o.push_str(&force_table(report, samples));
     o
 }

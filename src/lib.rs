@@ -7,6 +7,7 @@
 //! the summary).
 
 pub mod compare;
+pub mod forces;
 pub mod model;
 pub mod output;
 pub mod reference;

@@ -9,6 +9,7 @@ use std::process::ExitCode;
 use anyhow::Context as _;
 use clap::{Parser, Subcommand};
 
+use uncoil::compare::{SampleLog, table};
 use uncoil::output::{CsvObserver, ReportObserver, summary};
 use uncoil::run::{Observer, run};
 use uncoil::scene::Scene;
@@ -84,8 +85,9 @@ fn compare(paths: &[PathBuf]) -> ExitCode {
     }
     for scene in &scenes {
         eprintln!("running {} ...", scene.name);
-        match run(scene, &mut []) {
-            Ok(report) => println!("{}", uncoil::compare::table(&report)),
+        let mut log = SampleLog::default();
+        match run(scene, &mut [&mut log]) {
+            Ok(report) => println!("{}", table(&report, &log.samples)),
             Err(e) => {
                 eprintln!("error: {e:#}");
                 return ExitCode::from(1);

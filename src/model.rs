@@ -97,6 +97,8 @@ pub struct Observation {
     pub max_penetration_m: f64,
     /// The last step's length (s).
     pub dt_s: f64,
+    /// Linear momentum of everything that moves, `sum m v` (kg m/s).
+    pub momentum_kg_m_s: [f64; 2],
 }
 
 /// One link of the discretised tape: a chord of the spiral between two nodes.
@@ -748,6 +750,19 @@ impl Model {
         }
     }
 
+    /// Linear momentum of the dynamic bodies (kg m/s).
+    fn momentum(&self) -> [f64; 2] {
+        let mut p = [0.0, 0.0];
+        for (_, body) in self.world.bodies.iter() {
+            if body.is_dynamic() {
+                let v = body.linvel();
+                p[0] += body.mass() * v.x;
+                p[1] += body.mass() * v.y;
+            }
+        }
+        p
+    }
+
     /// Floor forces on the moving tape from the last step's contact impulses (N).
     fn floor_forces(&self) -> (f64, f64) {
         floor_forces(&self.world.narrow_phase, self.floor, self.last_dt)
@@ -814,6 +829,7 @@ impl Model {
             max_joint_gap_m: self.max_joint_gap(),
             max_penetration_m: self.max_penetration(),
             dt_s: self.last_dt,
+            momentum_kg_m_s: self.momentum(),
         }
     }
 

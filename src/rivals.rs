@@ -91,12 +91,34 @@ pub struct Rival {
     /// Laid fraction at which this motion stops (its speed falls to zero), if it does.
     pub stall_fraction: Option<f64>,
     time: Box<dyn Fn(f64) -> Option<f64>>,
+    /// The inverse of `time`, where a cheaper one than bisection exists.
+    fraction: Option<Box<dyn Fn(f64) -> Option<f64>>>,
 }
 
 impl Rival {
     /// Time to reach the laid fraction `f` (s); `None` if this motion never gets there.
     pub fn time_at_fraction(&self, f: f64) -> Option<f64> {
         (self.time)(f)
+    }
+
+    /// The laid fraction at time `t` (bisection on [`Self::time_at_fraction`]), `None` past
+    /// the tabulated end or beyond a stall.
+    pub fn fraction_at_time(&self, t: f64) -> Option<f64> {
+        if let Some(inverse) = &self.fraction {
+            return inverse(t);
+        }
+        if t > self.time_at_fraction(F_END)? {
+            return None;
+        }
+        let (mut lo, mut hi) = (0.0, F_END);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            match self.time_at_fraction(mid) {
+                Some(tm) if tm < t => lo = mid,
+                _ => hi = mid,
+            }
+        }
+        Some(0.5 * (lo + hi))
     }
 }
 
@@ -155,13 +177,15 @@ fn from_rate(
         Some(q) => (q + (1.0 - q_end) / f64::from(n), Some(1.0 - q)),
         None => (q_end, None),
     };
-    let traj = Trajectory::new(1.0, end, PANELS, rate);
+    let traj = std::rc::Rc::new(Trajectory::new(1.0, end, PANELS, rate));
+    let inverse = std::rc::Rc::clone(&traj);
     Rival {
         label: label.into(),
         description: description.into(),
         valid,
         stall_fraction,
         time: Box::new(move |f| traj.time_at(1.0 - f)),
+        fraction: Some(Box::new(move |t| inverse.q_at(t).map(|q| 1.0 - q))),
     }
 }
 
@@ -178,18 +202,24 @@ fn closed(
         valid,
         stall_fraction: None,
         time: Box::new(time),
+        fraction: None,
     }
 }
 
 /// The exact-geometry model of the scene's spiral (on its slope), as a rival.
 fn exact(scene: &Scene, valid: bool) -> Rival {
-    let e = exact_geometry(scene);
-    closed(
+    let e = std::rc::Rc::new(exact_geometry(scene));
+    let inverse = std::rc::Rc::clone(&e);
+    let mut rival = closed(
         "exact",
         "exact geometry: the rigid spiral the links form, rolling on its midline, energy conserved",
         valid,
         move |f| e.time_at_fraction(f),
-    )
+    );
+    rival.fraction = Some(Box::new(move |t| {
+        inverse.state_at_time(t).map(|s| s.laid_fraction)
+    }));
+    rival
 }
 
 /// All rivals of a scene, the valid reference first.

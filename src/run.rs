@@ -6,8 +6,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::forces::{ForceFn, force_reference};
 use crate::model::{EnergyLedger, Model, Observation, Phase};
 use crate::reference::{Continuum, ExactGeometry, ForceTorque, Params};
+use crate::rivals::{Rival, SpoolGeometry, rivals};
 use crate::scene::Scene;
 
 /// One row of output: the simulation and its references at the same instant.
@@ -65,6 +67,22 @@ pub struct Sample {
     pub kinetic_geo_j: f64,
     /// Eq. (17): coil radius (m).
     pub r_ft_m: f64,
+    /// The scene's valid reference (see `rivals`): laid fraction at this time, `NaN` where
+    /// it has none or past its end.
+    pub laid_fraction_ref: f64,
+    /// Spools: angle unrolled, `theta = f l / r` (rad); `NaN` for a solid coil.
+    pub theta_rad: f64,
+    /// Spools: the valid reference's `theta` at this time (rad).
+    pub theta_ref_rad: f64,
+    /// Total upward force on the coil from the momentum balance of the moving tape over
+    /// the last sample interval, `dP_y/dt + m g cos(a)` (N).
+    pub n_tot_n: f64,
+    /// Total horizontal force on the coil, `dP_x/dt - m g sin(a)`, +x positive (N).
+    pub f_tot_n: f64,
+    /// The case's analytic `N_tot` at the simulation's laid fraction (see `forces`) (N).
+    pub n_tot_ref_n: f64,
+    /// The case's analytic `F_tot` at the simulation's laid fraction (N).
+    pub f_tot_ref_n: f64,
     /// Bodies in the engine.
     pub active_bodies: usize,
     /// Largest joint separation (m).
@@ -180,6 +198,14 @@ pub struct References {
     pub force_torque: ForceTorque,
     /// The exact-geometry model.
     pub exact: ExactGeometry,
+    /// The scene's valid reference among the paper's rivals, if it has one.
+    pub valid: Option<Rival>,
+    /// The case's analytic constraint forces.
+    pub forces: Option<ForceFn>,
+    /// Spools: `l / r`, the angle of the whole tape (rad).
+    pub theta_per_fraction: Option<f64>,
+    /// `(g sin a, g cos a)` (m/s^2).
+    pub gravity_along_across: (f64, f64),
 }
 
 impl References {
@@ -191,6 +217,16 @@ impl References {
             continuum: Continuum::new(p, r_end),
             force_torque: ForceTorque::new(p),
             exact: exact_geometry(scene),
+            valid: rivals(scene).into_iter().find(|r| r.valid),
+            forces: force_reference(scene),
+            theta_per_fraction: (scene.tape.core_radius_m > 0.0).then(|| {
+                let sg = SpoolGeometry::of(scene);
+                sg.l_m / sg.r_m
+            }),
+            gravity_along_across: {
+                let (s, c) = scene.slope_deg.to_radians().sin_cos();
+                (scene.g_m_s2 * s, scene.g_m_s2 * c)
+            },
         }
     }
 }
@@ -273,6 +309,8 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
     let mut wall_rolling = None;
     let mut max_gap: f64 = 0.0;
     let mut max_pen: f64 = 0.0;
+    // Momentum and time at the last sample, for the force balance over the interval.
+    let mut at_last_sample = (model.observe().momentum_kg_m_s, 0.0);
     let stop_reason;
     loop {
         let start = Instant::now();
@@ -304,7 +342,17 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
         let done = obs.phase == Phase::Done;
         let timed_out = obs.t_s >= scene.stop.max_time_s;
         if obs.t_s >= next_sample || done || timed_out {
-            let sample = make_sample(&obs, xdot, e0, &refs);
+            let mut sample = make_sample(&obs, xdot, e0, &refs);
+            let (p0, t0) = at_last_sample;
+            let span = obs.t_s - t0;
+            if span > 0.0 {
+                let coil_mass = scene.tape.mass_kg * (1.0 - obs.laid_fraction).max(0.0);
+                let (g_along, g_across) = refs.gravity_along_across;
+                let p = obs.momentum_kg_m_s;
+                sample.n_tot_n = (p[1] - p0[1]) / span + coil_mass * g_across;
+                sample.f_tot_n = (p[0] - p0[0]) / span - coil_mass * g_along;
+            }
+            at_last_sample = (obs.momentum_kg_m_s, obs.t_s);
             for o in observers.iter_mut() {
                 o.observe_sample(&sample)?;
             }
@@ -401,6 +449,12 @@ fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &References) -> Samp
     let c = refs.continuum.state_at_time(obs.t_s);
     let g = refs.exact.state_at_time(obs.t_s);
     let r_ref = c.map_or(nan, |s| s.r_m);
+    let f_ref = refs
+        .valid
+        .as_ref()
+        .and_then(|r| r.fraction_at_time(obs.t_s))
+        .unwrap_or(nan);
+    let forces = refs.forces.as_ref().and_then(|f| f(obs.laid_fraction));
     Sample {
         t_s: obs.t_s,
         laid_fraction: obs.laid_fraction,
@@ -428,6 +482,15 @@ fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &References) -> Samp
         xdot_geo_m_s: g.map_or(nan, |s| s.xdot_m_s),
         kinetic_geo_j: g.map_or(nan, |s| s.kinetic_j),
         r_ft_m: refs.force_torque.radius_at_time(obs.t_s).unwrap_or(nan),
+        laid_fraction_ref: f_ref,
+        theta_rad: refs
+            .theta_per_fraction
+            .map_or(nan, |k| k * obs.laid_fraction),
+        theta_ref_rad: refs.theta_per_fraction.map_or(nan, |k| k * f_ref),
+        n_tot_n: nan,
+        f_tot_n: nan,
+        n_tot_ref_n: forces.map_or(nan, |f| f.0),
+        f_tot_ref_n: forces.map_or(nan, |f| f.1),
         active_bodies: obs.active_bodies,
         max_joint_gap_m: obs.max_joint_gap_m,
         max_penetration_m: obs.max_penetration_m,
