@@ -35,7 +35,7 @@ const FORCE_FRACTIONS: [f64; 5] = [0.1, 0.25, 0.5, 0.75, 0.9];
 const FORCE_WINDOW: f64 = 0.01;
 
 /// Mean of `value` over the rolling-phase samples with laid fraction within `half` of `f`.
-fn window_mean(
+pub fn window_mean(
     samples: &[Sample],
     f: f64,
     half: f64,
@@ -55,9 +55,10 @@ fn window_mean(
     (n > 0).then(|| sum / f64::from(n))
 }
 
-/// The first laid fraction at which the simulated `F_tot`, averaged over windows of 0.02,
+/// The first laid fraction up to `f_max` at which the simulated `F_tot`, averaged over
+/// windows of 0.02,
 /// changes sign.
-fn sim_sign_change(samples: &[Sample], f_max: f64) -> Option<f64> {
+pub fn sim_sign_change(samples: &[Sample], f_max: f64) -> Option<f64> {
     let mut prev: Option<(f64, f64)> = None;
     let mut f = FORCE_WINDOW;
     while f <= f_max {

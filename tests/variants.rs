@@ -1,6 +1,8 @@
 //! Every variant of the paper as a scene: the run against its valid reference, the energy
 //! ledger, and what the paradox table shows (the competing equations that it does not follow).
 
+use uncoil::compare::{sim_sign_change, window_mean};
+use uncoil::forces::{force_reference, sign_change_fraction};
 use uncoil::rivals::{Rival, rivals};
 use uncoil::run::{Observer, RunReport, Sample, run};
 use uncoil::scene::Scene;
@@ -68,6 +70,49 @@ fn assert_converges(report: &RunReport, r: &Rival, milestones: usize) {
             100.0 * e
         );
     }
+}
+
+/// `N_tot` within `n_tol` (relative) of the analytic force at the given laid fractions, and
+/// `F_tot` within `f_tol` of `N_tot`'s scale, both averaged over f +- 0.01.
+fn assert_forces_follow(s: &Scene, samples: &[Sample], fractions: &[f64], n_tol: f64, f_tol: f64) {
+    let forces = force_reference(s).expect("an analytic force");
+    for &f in fractions {
+        let (n_ref, f_ref) = forces(f).unwrap();
+        let n = window_mean(samples, f, 0.01, |s| s.n_tot_n).unwrap();
+        let fx = window_mean(samples, f, 0.01, |s| s.f_tot_n).unwrap();
+        assert!(
+            (n / n_ref - 1.0).abs() < n_tol,
+            "{}: f = {f}: N_tot {n:.5} N, reference {n_ref:.5} N",
+            s.name
+        );
+        assert!(
+            (fx - f_ref).abs() < f_tol * n_ref,
+            "{}: f = {f}: F_tot {fx:.5} N, reference {f_ref:.5} N",
+            s.name
+        );
+    }
+}
+
+#[test]
+fn yoga_mat_constraint_forces_follow_eqs_9_and_11_and_change_sign_as_a7_says() {
+    // N_tot exact per ERRATA A4, F_tot of eq. (11) (= eq. 30 corrected, A6); with the push,
+    // F_tot changes sign earlier than (2/5)^(1/3) R (f = 0.457), as A7 says.
+    let s = scene("yoga-mat");
+    let (samples, _) = run_kept(&s);
+    // The continuum forms are O(b/R) = 8 % idealisations of this thick mat, whose motion
+    // follows the exact spiral: F_tot is 5 % (1.2 % of N_tot) above eq. (11) at f = 0.75.
+    assert_forces_follow(&s, &samples, &[0.1, 0.25, 0.5, 0.75], 0.01, 0.02);
+    let f_sim = sim_sign_change(&samples, 0.9).expect("F_tot changes sign");
+    let forces = force_reference(&s).unwrap();
+    let f_ref = sign_change_fraction(&forces, 0.9).unwrap();
+    assert!(
+        (f_sim - f_ref).abs() < 0.01,
+        "sim {f_sim}, eq. (11) {f_ref}"
+    );
+    assert!(
+        f_ref < 1.0 - 0.4f64.powf(2.0 / 3.0) - 0.02,
+        "eq. (11) {f_ref}"
+    );
 }
 
 /// The ledger closes at every sample: its parts add up to `E0 - K - P`.
@@ -168,6 +213,14 @@ fn spool_follows_the_exact_spiral_and_eq79_only_on_average() {
             100.0 * e
         );
     }
+    // Constraint forces: N = m g (85) and F_tot of (86) corrected per ERRATA A16, which
+    // changes sign where half the tape is laid, r theta = l/2.
+    assert_forces_follow(&s, &samples, &[0.1, 0.25, 0.5, 0.75], 0.01, 0.05);
+    let f_sim = sim_sign_change(&samples, 0.9).expect("F_tot changes sign");
+    assert!(
+        (f_sim - 0.5).abs() < 0.01,
+        "F_tot changes sign at f = {f_sim}"
+    );
     // The printed closed form (81)-(82) is off by the factor l/r (ERRATA A14).
     for (m, e) in errors(&report, rival(&rv, "(81) print")) {
         assert!(e < -0.99, "(81) as printed at {m}: {:+.2} %", 100.0 * e);
