@@ -3,7 +3,7 @@
 //! Pure `f64`, no engine types; this module neither simulates nor prints.
 //!
 //! Every rival is one degree of freedom. Those with a first integral are tabulated by the
-//! quadrature of [`Trajectory`]; the two without one (eq. 62 and, through its closed linear
+//! quadrature of the reference module's `Trajectory`; the two without one (eq. 62 and, through its closed linear
 //! first integral, eq. 68) are reduced to `w = q'^2` as a function of the coordinate.
 //! The common coordinate is the remaining mass fraction `q = 1 - f`, which falls from 1.
 
