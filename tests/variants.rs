@@ -269,3 +269,32 @@ fn frictionless_coil_keeps_its_centre_of_mass() {
     );
     assert_ledger_closes(&samples);
 }
+
+#[test]
+fn compare_prints_the_paradox_table_and_rejects_a_bad_scene_first() {
+    use assert_cmd::Command;
+    use predicates::prelude::*;
+    let good = format!("{}/scenes/single-turn.toml", env!("CARGO_MANIFEST_DIR"));
+    Command::cargo_bin("uncoil")
+        .unwrap()
+        .args(["compare", &good])
+        .assert()
+        .success()
+        .stdout(predicate::str::contains("#### single-turn (App. A;"))
+        .stdout(predicate::str::contains(
+            "| milestone | f | sim s | eq.45 * s |",
+        ))
+        .stdout(predicate::str::contains("| f | N_tot sim N |"));
+    // A bad scene anywhere in the list stops everything before the first run.
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, "[tape]\nouter_radius_m = 0.06\n").unwrap();
+    Command::cargo_bin("uncoil")
+        .unwrap()
+        .args(["compare", &good])
+        .arg(&bad)
+        .assert()
+        .code(2)
+        .stdout(predicate::str::is_empty())
+        .stderr(predicate::str::contains("missing field `thickness_m`"));
+}
