@@ -220,6 +220,8 @@ pub struct Model {
     floor: ColliderHandle,
     coil: Option<RigidBodyHandle>,
     coil_ball: Option<ColliderHandle>,
+    /// A sticky floor's hold on the coil: a pin at the contact line, moved every step.
+    stick: Option<ImpulseJointHandle>,
     coil_sums: CoilSums,
     /// Index of the outermost link still in the coil.
     first_attached: usize,
@@ -340,6 +342,19 @@ impl Model {
         // The engine computes mass properties lazily at the next step; energies are read
         // before that, so compute them now.
         world.bodies[coil].recompute_mass_properties_from_colliders(&world.colliders);
+        let stick = scene.sticky.then(|| {
+            world.insert_impulse_joint(
+                ground,
+                coil,
+                RevoluteJointBuilder::new()
+                    .local_anchor1(Vector::new(0.0, 0.5 * b - sink))
+                    .local_anchor2({
+                        let q = spiral.point(psi_low);
+                        Vector::new(q[0], q[1])
+                    })
+                    .contacts_enabled(false),
+            )
+        });
 
         let bang_r = scene.stop.bang_radius_m;
         let bang_fraction = if tape.core_radius_m > 0.0 {
@@ -379,6 +394,7 @@ impl Model {
             floor,
             coil: Some(coil),
             coil_ball: Some(coil_ball),
+            stick,
             coil_sums,
             first_attached: 0,
             coil_angle,
@@ -545,6 +561,24 @@ impl Model {
             self.spiral.curvature_radius(self.psi_low) * self.chord_ratio,
         ));
         collider.set_position_wrt_parent(Pose::from_translation(Vector::new(c[0], c[1])));
+        self.restick();
+    }
+
+    /// Moves a sticky floor's pin to the coil's current contact line: the material point
+    /// under the ball's centre, held at the floor's plane.
+    fn restick(&mut self) {
+        let (Some(stick), Some(coil)) = (self.stick, self.coil) else {
+            return;
+        };
+        let c = self.spiral.curvature_centre(self.psi_low);
+        let pose = *self.world.bodies[coil].position();
+        let centre = pose.transform_point(Vector::new(c[0], c[1]));
+        let contact = Vector::new(centre.x, self.half_b);
+        let local = pose.inverse_transform_point(contact);
+        if let Some(joint) = self.world.impulse_joints.get_mut(stick, false) {
+            joint.data.set_local_anchor1(contact);
+            joint.data.set_local_anchor2(local);
+        }
     }
 
     /// Creates the body of link `k` with the coil's velocity field.

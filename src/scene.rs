@@ -146,6 +146,9 @@ pub struct Scene {
     /// (default: 0.0). The floor stays the plane `y = 0` of the simulation frame and gravity
     /// is tilted instead: `g = g (sin alpha, -cos alpha)`.
     pub slope_deg: f64,
+    /// Whether the tape sticks to the floor where it touches it (sec. 2.1 remark for g = 0):
+    /// the coil is then held at its contact line, pulled as well as pushed (default: false).
+    pub sticky: bool,
     /// Gravitational acceleration, m/s² (default: 9.81).
     pub g_m_s2: f64,
     /// Initial speed of the contact line, m/s (default: 0.0, which is rejected: a scene
@@ -219,6 +222,7 @@ impl Default for DiscretisationFile {
 struct FloorFile {
     friction: f64,
     slope_deg: f64,
+    sticky: bool,
 }
 
 impl Default for FloorFile {
@@ -226,6 +230,7 @@ impl Default for FloorFile {
         Self {
             friction: DEFAULT_FRICTION,
             slope_deg: 0.0,
+            sticky: false,
         }
     }
 }
@@ -557,6 +562,7 @@ impl Scene {
             links_per_turn,
             friction,
             slope_deg,
+            sticky: file.floor.sticky,
             g_m_s2: g,
             push_speed_m_s: push,
             solver,
