@@ -82,7 +82,8 @@ pub fn force_table(report: &RunReport, samples: &[Sample]) -> String {
     let Some(forces) = force_reference(&report.scene) else {
         let _ = writeln!(
             o,
-            "Constraint forces: none analytic (frictionless floor: F = 0 by construction)."
+            "Constraint forces: no analytic form for this case (a frictionless floor exerts no \
+             horizontal force; a fixed axis has no floor)."
         );
         return o;
     };
@@ -208,10 +209,11 @@ pub fn table(report: &RunReport, samples: &[Sample]) -> String {
     let l = &report.ledger;
     let _ = writeln!(
         o,
-        "- energy: E0 = {:.4} J, lost before the bang {:.5} J ({:.2}% of E0), kinetic into the bang {:.4} J",
+        "- energy: E0 = {:.4} J, lost before the bang {:.5} J ({:.2}% of what the bang would \
+         otherwise receive), kinetic into the bang {:.4} J",
         l.e0_j,
         l.lost_before_bang_j,
-        100.0 * l.lost_before_bang_j / l.e0_j,
+        100.0 * l.lost_before_bang_j / (l.lost_before_bang_j + l.kinetic_into_bang_j),
         l.kinetic_into_bang_j
     );
     let _ = writeln!(o);

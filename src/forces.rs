@@ -17,7 +17,8 @@ use crate::scene::Scene;
 /// `(N_tot, F_tot)` in N at a laid fraction, `None` where the reference does not exist.
 pub type ForceFn = Box<dyn Fn(f64) -> Option<(f64, f64)>>;
 
-/// The paper's constraint forces for a scene's case; `None` for the frictionless cases,
+/// The paper's constraint forces for a scene's case; `None` for the fixed axis (no floor)
+/// and the frictionless cases,
 /// whose floor exerts no horizontal force by construction.
 ///
 /// ```text
@@ -100,7 +101,7 @@ pub fn force_reference(scene: &Scene) -> Option<ForceFn> {
                 Some((n, fx))
             }))
         }
-        Case::FrictionlessSpool | Case::FrictionlessCoil => None,
+        Case::FrictionlessSpool | Case::FrictionlessCoil | Case::Vertical => None,
     }
 }
 

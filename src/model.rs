@@ -227,6 +227,9 @@ pub struct Model {
     first_attached: usize,
     /// Unwrapped rotation angle of the coil (rad).
     coil_angle: f64,
+    /// The coil's rotation minus that of a rolling coil with the same point leaving it:
+    /// 0 on the floor, pi/2 on a fixed axis, where the tape leaves at the side (rad).
+    angle_offset: f64,
     psi_low: f64,
 
     free: VecDeque<FreeLink>,
@@ -289,9 +292,15 @@ impl Model {
         ip.dt = scene.solver.max_dt_s;
 
         let ground = world.insert_body(RigidBodyBuilder::fixed());
+        // On a fixed axis the tape hangs freely: the floor is put out of its reach.
+        let floor_y = if scene.fixed_axis {
+            -(spiral.length() + tape.outer_radius_m + 1.0)
+        } else {
+            0.5 * b
+        };
         let floor = world.insert_collider(
             ColliderBuilder::new(SharedShape::halfspace(Vector::Y))
-                .translation(Vector::new(0.0, 0.5 * b))
+                .translation(Vector::new(0.0, floor_y))
                 .friction(scene.friction)
                 .collision_groups(InteractionGroups::new(
                     FLOOR_GROUP,
@@ -327,6 +336,16 @@ impl Model {
         } else {
             Vector::ZERO
         };
+        // On a fixed axis (App. E) the picture is turned by a quarter turn about the spiral's
+        // centre, which stays at the origin: the tape leaves at the right and hangs down.
+        let angle_offset = if scene.fixed_axis { 0.5 * PI } else { 0.0 };
+        let (origin, coil_angle, linvel) = if scene.fixed_axis {
+            let angle = coil_angle + angle_offset;
+            let c = rotate([com_local.x, com_local.y], angle);
+            ([0.0, 0.0], angle, Vector::new(-omega * c[1], omega * c[0]))
+        } else {
+            (origin, coil_angle, linvel)
+        };
         let coil = world.insert_body(
             RigidBodyBuilder::dynamic()
                 .pose(Pose::new(Vector::new(origin[0], origin[1]), coil_angle))
@@ -335,6 +354,16 @@ impl Model {
                 .angvel(omega)
                 .can_sleep(false),
         );
+        if scene.fixed_axis {
+            world.insert_impulse_joint(
+                ground,
+                coil,
+                RevoluteJointBuilder::new()
+                    .local_anchor1(Vector::ZERO)
+                    .local_anchor2(Vector::ZERO)
+                    .contacts_enabled(false),
+            );
+        }
         let coil_ball = world.insert_collider(
             Self::ball_builder(&spiral, psi_low, chord_ratio, scene.friction),
             Some(coil),
@@ -398,6 +427,7 @@ impl Model {
             coil_sums,
             first_attached: 0,
             coil_angle,
+            angle_offset,
             psi_low,
             free: VecDeque::new(),
             frozen_potential_j: 0.0,
@@ -508,7 +538,7 @@ impl Model {
             self.coil_angle += d;
             self.psi_low = self
                 .spiral
-                .lowest_psi(self.coil_angle, self.psi_low)
+                .lowest_psi(self.coil_angle - self.angle_offset, self.psi_low)
                 .clamp(self.spiral.psi_in, self.spiral.psi_out);
             while self.shedding
                 && self.first_attached + 1 < self.links.len()

@@ -34,6 +34,8 @@ pub enum Case {
     FrictionlessSpool,
     /// App. D, footnote 23: the solid coil on a frictionless floor.
     FrictionlessCoil,
+    /// App. E: one turn on a massless spool on a fixed axis, the tape hanging from it.
+    Vertical,
 }
 
 impl Case {
@@ -42,6 +44,9 @@ impl Case {
     pub fn of(scene: &Scene) -> Self {
         let t = &scene.tape;
         let spool = t.core_radius_m > 0.0;
+        if scene.fixed_axis {
+            return Case::Vertical;
+        }
         if scene.friction <= 0.0 {
             return if spool {
                 Case::FrictionlessSpool
@@ -76,6 +81,7 @@ impl Case {
             Case::Spool => "App. C",
             Case::FrictionlessSpool => "App. D",
             Case::FrictionlessCoil => "App. D, fn. 23",
+            Case::Vertical => "App. E",
         }
     }
 }
@@ -232,6 +238,7 @@ pub fn rivals(scene: &Scene) -> Vec<Rival> {
         Case::Spool => spool_rivals(scene, p),
         Case::FrictionlessSpool => frictionless_spool_rivals(scene, p),
         Case::FrictionlessCoil => frictionless_coil_rivals(scene, p),
+        Case::Vertical => vertical_rivals(scene),
     }
 }
 
@@ -347,14 +354,19 @@ pub fn single_turn_spin(r: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 {
 ///             / (2 pi - theta + sin theta)
 /// ```
 fn eq62_w(r: f64, g: f64, spin0: f64, theta_end: f64, n: usize) -> Vec<f64> {
-    let dw = |theta: f64, w: f64| {
+    tabulate_w(spin0 * spin0, theta_end, n, |theta, w| {
         let left = 2.0 * PI - theta;
         (w * (2.0 - theta.cos() + theta.sin() / left) + g / r * (1.0 - theta.cos()))
             / (left + theta.sin())
-    };
+    })
+}
+
+/// `w(theta)` from `dw/dtheta = dw(theta, w)` and `w(0) = w0`, by RK4 on `n` uniform steps
+/// up to `theta_end`.
+fn tabulate_w(w0: f64, theta_end: f64, n: usize, dw: impl Fn(f64, f64) -> f64) -> Vec<f64> {
     #[allow(clippy::cast_precision_loss)]
     let h = theta_end / n as f64;
-    let mut w = spin0 * spin0;
+    let mut w = w0;
     let mut out = Vec::with_capacity(n + 1);
     out.push(w);
     for k in 0..n {
@@ -370,22 +382,79 @@ fn eq62_w(r: f64, g: f64, spin0: f64, theta_end: f64, n: usize) -> Vec<f64> {
     out
 }
 
+/// Linear interpolation of a [`tabulate_w`] table, as `sqrt(w)` at `theta`.
+fn table_spin(table: Vec<f64>, theta_end: f64) -> impl Fn(f64) -> f64 {
+    let n = table.len() - 1;
+    #[allow(clippy::cast_precision_loss)]
+    let h = theta_end / n as f64;
+    move |theta: f64| {
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let k = ((theta / h).floor().max(0.0) as usize).min(n - 1);
+        #[allow(clippy::cast_precision_loss)]
+        let s = theta / h - k as f64;
+        ((1.0 - s) * table[k] + s * table[k + 1]).sqrt()
+    }
+}
+
+/// Eq. (115) through its energy integral, with the potential energy corrected per ERRATA
+/// A21 (`V = +M g r (1 - cos theta) / (2 pi) - M g r theta^2 / (4 pi)`, y downward):
+/// ```text
+/// theta'' = g (theta - sin theta) / (2 pi r)                                          (115)
+/// theta'^2 = theta0'^2 + g (theta^2 - 2 + 2 cos theta) / (2 pi r)
+/// ```
+/// so the tape leaves the spool (theta = 2 pi) at `v^2 = 2 pi g r + r^2 theta0'^2` (B17).
+pub fn vertical_spin(r: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 {
+    move |theta: f64| {
+        (spin0 * spin0 + g * (theta * theta - 2.0 + 2.0 * theta.cos()) / (2.0 * PI * r)).sqrt()
+    }
+}
+
+fn vertical_rivals(scene: &Scene) -> Vec<Rival> {
+    let sg = SpoolGeometry::of(scene);
+    let (r, g, w0) = (sg.r_m, scene.g_m_s2, sg.spin0_rad_s);
+    let spin = vertical_spin(r, g, w0);
+    let theta_end = 2.0 * PI * F_END;
+    // Eq. (124), the control-volume Lagrangian of E.3.2: theta'' (1 - theta / 2 pi) =
+    // g (theta - sin theta) / (2 pi r).
+    let eq124 = table_spin(
+        tabulate_w(w0 * w0, theta_end, 200_000, |th, _| {
+            g * (th - th.sin()) / (PI * r * (1.0 - th / (2.0 * PI)))
+        }),
+        theta_end,
+    );
+    vec![
+        from_rate(
+            "eq.115",
+            "eq. (115), energy with V corrected per ERRATA A21 = torque (116)-(117) = \
+             Lagrange (E.3.1)",
+            true,
+            move |q| spin(2.0 * PI * (1.0 - q)) / (2.0 * PI),
+        ),
+        from_rate(
+            "eq.124",
+            "eq. (124), the variable-mass (control-volume) Lagrangian of E.3.2",
+            false,
+            move |q| eq124(2.0 * PI * (1.0 - q)) / (2.0 * PI),
+        ),
+        from_rate(
+            "(114) print",
+            "the printed V of (114) (sign slip, ERRATA A21): theta'' = g (theta + sin theta) / (2 pi r)",
+            false,
+            move |q| {
+                let th = 2.0 * PI * (1.0 - q);
+                (w0 * w0 + g * (0.5 * th * th + 1.0 - th.cos()) / (PI * r)).sqrt() / (2.0 * PI)
+            },
+        ),
+    ]
+}
+
 fn single_turn_rivals(scene: &Scene, _p: Params) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
     let (r, g, w0) = (sg.r_m, scene.g_m_s2, sg.spin0_rad_s);
     let spin = single_turn_spin(r, g, w0);
     let theta_end = 2.0 * PI * F_END;
     let n = 200_000;
-    let table = eq62_w(r, g, w0, theta_end, n);
-    #[allow(clippy::cast_precision_loss)]
-    let h = theta_end / n as f64;
-    let eq62 = move |theta: f64| {
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-        let k = ((theta / h).floor() as usize).min(n - 1);
-        #[allow(clippy::cast_precision_loss)]
-        let s = theta / h - k as f64;
-        ((1.0 - s) * table[k] + s * table[k + 1]).sqrt()
-    };
+    let eq62 = table_spin(eq62_w(r, g, w0, theta_end, n), theta_end);
     vec![
         from_rate(
             "eq.45",

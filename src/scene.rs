@@ -149,6 +149,9 @@ pub struct Scene {
     /// Whether the tape sticks to the floor where it touches it (sec. 2.1 remark for g = 0):
     /// the coil is then held at its contact line, pulled as well as pushed (default: false).
     pub sticky: bool,
+    /// Whether the coil turns about a fixed horizontal axis through the spiral's centre,
+    /// the tape hanging from it (App. E), instead of rolling on the floor (default: false).
+    pub fixed_axis: bool,
     /// Gravitational acceleration, m/s² (default: 9.81).
     pub g_m_s2: f64,
     /// Initial speed of the contact line, m/s (default: 0.0, which is rejected: a scene
@@ -189,6 +192,8 @@ struct SceneFile {
     contact: ContactFile,
     #[serde(default)]
     stop: StopFile,
+    #[serde(default)]
+    axis: AxisFile,
     #[serde(default)]
     output: OutputFile,
 }
@@ -306,6 +311,12 @@ impl Default for StopFile {
             settle_time_s: DEFAULT_SETTLE_TIME_S,
         }
     }
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct AxisFile {
+    fixed: bool,
 }
 
 #[derive(Debug, Deserialize)]
@@ -563,6 +574,7 @@ impl Scene {
             friction,
             slope_deg,
             sticky: file.floor.sticky,
+            fixed_axis: file.axis.fixed,
             g_m_s2: g,
             push_speed_m_s: push,
             solver,

@@ -323,3 +323,42 @@ fn zero_g_coil_on_a_sticky_floor_rolls_on_its_push_alone() {
     }
     assert_ledger_closes(&samples);
 }
+
+#[test]
+fn vertical_tape_follows_eq115_and_leaves_at_its_exit_speed() {
+    let s = scene("vertical");
+    let (samples, report) = run_kept(&s);
+    let rv = rivals(&s);
+    assert_converges(&report, rival(&rv, "eq.115"), 4);
+    assert_ledger_closes(&samples);
+    // Energy is conserved to 0.1 % of the kinetic energy reached at f = 0.9.
+    let m = report
+        .milestones
+        .iter()
+        .find(|m| m.label == "f=0.9")
+        .unwrap();
+    let lost = m.dissipated_j.unwrap().abs() / m.kinetic_j.unwrap();
+    assert!(lost < 0.001, "lost {:.3} % of K by f = 0.9", 100.0 * lost);
+    // The tape speed r theta' follows eq. (115)'s integral; at theta = 2 pi it would be
+    // sqrt(2 pi g r + r^2 theta0'^2) (B17). Checked where 95 % hangs.
+    let sg = uncoil::rivals::SpoolGeometry::of(&s);
+    let spin = uncoil::rivals::vertical_spin(sg.r_m, s.g_m_s2, sg.spin0_rad_s);
+    let at = samples
+        .iter()
+        .find(|x| x.laid_fraction >= 0.95)
+        .expect("95 % reached");
+    let want = spin(2.0 * std::f64::consts::PI * at.laid_fraction);
+    let got = at.omega_rad_s;
+    assert!(
+        (got / want - 1.0).abs() < 0.01,
+        "theta' at f = {:.4}: {got:.3} rad/s, eq. (115) {want:.3} rad/s",
+        at.laid_fraction
+    );
+    let exit =
+        (2.0 * std::f64::consts::PI * 9.81 * sg.r_m + (sg.r_m * sg.spin0_rad_s).powi(2)).sqrt();
+    assert!((sg.r_m * spin(2.0 * std::f64::consts::PI) / exit - 1.0).abs() < 1e-12);
+    // The control-volume Lagrangian (124) runs 2-4 % ahead.
+    for (m, e) in errors(&report, rival(&rv, "eq.124")) {
+        assert!(e < -0.015, "eq. 124 at {m}: {:+.2} %", 100.0 * e);
+    }
+}
