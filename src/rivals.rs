@@ -234,9 +234,9 @@ pub fn rivals(scene: &Scene) -> Vec<Rival> {
     match Case::of(scene) {
         Case::Coil | Case::ZeroG => coil_rivals(scene, p),
         Case::Slope => slope_rivals(scene, p),
-        Case::SingleTurn => single_turn_rivals(scene, p),
-        Case::Spool => spool_rivals(scene, p),
-        Case::FrictionlessSpool => frictionless_spool_rivals(scene, p),
+        Case::SingleTurn => single_turn_rivals(scene),
+        Case::Spool => spool_rivals(scene),
+        Case::FrictionlessSpool => frictionless_spool_rivals(scene),
         Case::FrictionlessCoil => frictionless_coil_rivals(scene, p),
         Case::Vertical => vertical_rivals(scene),
     }
@@ -448,7 +448,7 @@ fn vertical_rivals(scene: &Scene) -> Vec<Rival> {
     ]
 }
 
-fn single_turn_rivals(scene: &Scene, _p: Params) -> Vec<Rival> {
+fn single_turn_rivals(scene: &Scene) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
     let (r, g, w0) = (sg.r_m, scene.g_m_s2, sg.spin0_rad_s);
     let spin = single_turn_spin(r, g, w0);
@@ -484,7 +484,7 @@ pub fn spool_time_from_rest(r: f64, l: f64, g: f64, u: f64) -> f64 {
     l / r * (r / g).sqrt() * ((u * (1.0 - u)).sqrt() + u.sqrt().asin())
 }
 
-fn spool_rivals(scene: &Scene, _p: Params) -> Vec<Rival> {
+fn spool_rivals(scene: &Scene) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
     let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.g_m_s2, sg.spin0_rad_s);
     let rate = spool_rate(r, l, g, w0);
@@ -519,7 +519,7 @@ fn spool_rivals(scene: &Scene, _p: Params) -> Vec<Rival> {
     ]
 }
 
-fn frictionless_spool_rivals(scene: &Scene, _p: Params) -> Vec<Rival> {
+fn frictionless_spool_rivals(scene: &Scene) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
     let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.g_m_s2, sg.spin0_rad_s);
     vec![
@@ -543,12 +543,13 @@ fn frictionless_spool_rivals(scene: &Scene, _p: Params) -> Vec<Rival> {
                 r / l * ((8.0 * g * u * l / r + 4.0 * l * w0 * w0) / (4.0 * l - 3.0 * l * u)).sqrt()
             },
         ),
-        spool_rivals(scene, _p).swap_remove(1).invalid(),
+        spool_rivals(scene).swap_remove(1).for_contrast(),
     ]
 }
 
 impl Rival {
-    fn invalid(mut self) -> Self {
+    /// The same rival shown for contrast in a case it does not describe.
+    fn for_contrast(mut self) -> Self {
         self.valid = false;
         self.label.push_str(" (friction)");
         self
