@@ -723,6 +723,23 @@ contact_speed_m_s = 0.3
     }
 
     #[test]
+    fn variant_keys_default_off_and_the_variant_scenes_set_them() {
+        let s = Scene::from_toml_str(MINIMAL, "t").unwrap();
+        assert_relative_eq!(s.slope_deg, 0.0);
+        assert!(!s.sticky && !s.fixed_axis);
+        assert_relative_eq!(shipped("slope-down").slope_deg, 5.0);
+        assert_relative_eq!(shipped("slope-up").slope_deg, -2.0);
+        assert!(shipped("zero-g").sticky);
+        assert!(shipped("vertical").fixed_axis);
+        for name in ["single-turn", "spool", "frictionless-spool"] {
+            assert!(shipped(name).tape.core_radius_m > 0.0, "{name}");
+        }
+        for name in ["frictionless-spool", "frictionless-coil"] {
+            assert_relative_eq!(shipped(name).friction, 0.0);
+        }
+    }
+
+    #[test]
     fn defaults_applied() {
         let s = Scene::from_toml_str(MINIMAL, "fallback").unwrap();
         assert_eq!(s.name, "fallback");
