@@ -220,8 +220,9 @@ pub struct Model {
     floor: ColliderHandle,
     coil: Option<RigidBodyHandle>,
     coil_ball: Option<ColliderHandle>,
-    /// A sticky floor's hold on the coil: a pin at the contact line, moved every step.
-    stick: Option<ImpulseJointHandle>,
+    /// A sticky floor's hold on the coil, moved every step: no slip at the contact line
+    /// (x locked) and the contact ball's centre at its height (y locked).
+    stick: Option<[ImpulseJointHandle; 2]>,
     coil_sums: CoilSums,
     /// Index of the outermost link still in the coil.
     first_attached: usize,
@@ -371,18 +372,16 @@ impl Model {
         // The engine computes mass properties lazily at the next step; energies are read
         // before that, so compute them now.
         world.bodies[coil].recompute_mass_properties_from_colliders(&world.colliders);
+        // A sticky floor holds the coil bilaterally where a floor contact only pushes; the
+        // anchors are set by `restick` before the first step.
         let stick = scene.sticky.then(|| {
-            world.insert_impulse_joint(
-                ground,
-                coil,
-                RevoluteJointBuilder::new()
-                    .local_anchor1(Vector::new(0.0, 0.5 * b - sink))
-                    .local_anchor2({
-                        let q = spiral.point(psi_low);
-                        Vector::new(q[0], q[1])
-                    })
-                    .contacts_enabled(false),
-            )
+            [JointAxesMask::LIN_X, JointAxesMask::LIN_Y].map(|axis| {
+                world.insert_impulse_joint(
+                    ground,
+                    coil,
+                    GenericJointBuilder::new(axis).contacts_enabled(false),
+                )
+            })
         });
 
         let bang_r = scene.stop.bang_radius_m;
@@ -441,6 +440,7 @@ impl Model {
             shedding: true,
             energy_j: 0.0,
         };
+        model.restick();
         model.energy_j = model.total_energy();
         model
     }
@@ -594,20 +594,29 @@ impl Model {
         self.restick();
     }
 
-    /// Moves a sticky floor's pin to the coil's current contact line: the material point
-    /// under the ball's centre, held at the floor's plane.
+    /// Moves a sticky floor's hold to the coil's current contact: x is locked at the material
+    /// point under the ball's centre (no slip: a rolling contact point has zero velocity and
+    /// zero horizontal acceleration), y at the ball's centre (its height is fixed, while the
+    /// contact point itself accelerates upward, so pinning it in y would brake the roll).
     fn restick(&mut self) {
-        let (Some(stick), Some(coil)) = (self.stick, self.coil) else {
+        let (Some([hold_x, hold_y]), Some(coil)) = (self.stick, self.coil) else {
             return;
         };
         let c = self.spiral.curvature_centre(self.psi_low);
+        let rho = self.spiral.curvature_radius(self.psi_low) * self.chord_ratio;
         let pose = *self.world.bodies[coil].position();
         let centre = pose.transform_point(Vector::new(c[0], c[1]));
         let contact = Vector::new(centre.x, self.half_b);
-        let local = pose.inverse_transform_point(contact);
-        if let Some(joint) = self.world.impulse_joints.get_mut(stick, false) {
+        let under = pose.inverse_transform_point(Vector::new(centre.x, centre.y - rho));
+        if let Some(joint) = self.world.impulse_joints.get_mut(hold_x, false) {
             joint.data.set_local_anchor1(contact);
-            joint.data.set_local_anchor2(local);
+            joint.data.set_local_anchor2(under);
+        }
+        if let Some(joint) = self.world.impulse_joints.get_mut(hold_y, false) {
+            joint
+                .data
+                .set_local_anchor1(Vector::new(centre.x, self.half_b + rho));
+            joint.data.set_local_anchor2(Vector::new(c[0], c[1]));
         }
     }
 
