@@ -19,6 +19,11 @@
 //! - When the coil's equivalent radius reaches the bang radius, the remaining links are
 //!   released as a free chain and the final bang is resolved by contact.
 //!
+//! - Variants (App. A-E): a slope tilts gravity in this frame (the floor stays `y = b/2`);
+//!   a core makes a spool; with no friction the coil starts spinning in place; a sticky floor
+//!   holds the coil bilaterally at its contact; a fixed axis pins the spiral's centre and
+//!   turns the picture by a quarter turn, so the tape leaves at the side and hangs.
+//!
 //! Every change of energy is measured where it happens, into an [`EnergyLedger`].
 
 use std::collections::VecDeque;
