@@ -218,7 +218,8 @@ fn exact(scene: &Scene, valid: bool) -> Rival {
     let inverse = std::rc::Rc::clone(&e);
     let mut rival = closed(
         "exact",
-        "exact geometry: the rigid spiral the links form, rolling on its midline, energy conserved",
+        "exact geometry: the rigid spiral the links form, rolling on its midline (sliding at \
+         zero momentum on a frictionless floor), energy conserved",
         valid,
         move |f| e.time_at_fraction(f),
     );
@@ -523,6 +524,7 @@ fn frictionless_spool_rivals(scene: &Scene) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
     let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.g_m_s2, sg.spin0_rad_s);
     vec![
+        exact(scene, true),
         from_rate(
             "A18",
             "App. D with the material velocity of the flat tape (ERRATA A18): \
@@ -583,6 +585,7 @@ fn frictionless_coil_rivals(scene: &Scene, p: Params) -> Vec<Rival> {
     let mut with_friction = coil_rivals(scene, p).swap_remove(1);
     with_friction.label.push_str(" (friction)");
     vec![
+        exact(scene, true),
         from_rate(
             "A19-A20",
             "frictionless coil, zero momentum with the flat tape's material velocity \

@@ -231,14 +231,19 @@ impl References {
     }
 }
 
-/// The exact-geometry model of a scene, on its slope, tabulated to half the bang radius (a
-/// solid coil) or to 99.5 % laid (a spool).
+/// The exact-geometry model of a scene, on its slope or sliding on a frictionless floor,
+/// tabulated to half the bang radius (a solid coil) or to 99.5 % laid (a spool).
 pub fn exact_geometry(scene: &Scene) -> ExactGeometry {
     let (p, slope) = (params(scene), scene.slope_deg.to_radians());
-    if scene.tape.core_radius_m > 0.0 {
-        ExactGeometry::to_fraction(p, slope, 0.995)
+    let f_end = if scene.tape.core_radius_m > 0.0 {
+        0.995
     } else {
-        ExactGeometry::on_slope(p, slope, 0.5 * scene.stop.bang_radius_m)
+        1.0 - (0.5 * scene.stop.bang_radius_m / scene.tape.outer_radius_m).powi(2)
+    };
+    if scene.friction <= 0.0 {
+        ExactGeometry::frictionless(p, f_end)
+    } else {
+        ExactGeometry::to_fraction(p, slope, f_end)
     }
 }
 
