@@ -687,6 +687,39 @@ mod tests {
     }
 
     #[test]
+    fn spool_exact_spiral_brackets_eq79_as_the_outer_partial_turn_varies() {
+        // Eq. (79) spreads the torque of the unbalanced outer partial turn evenly over each
+        // turn; the real spiral starting from near rest is slower or faster with the size
+        // of that partial turn: 39.25 turns run behind eq. (79), 39.5 turns ahead.
+        let (r, b) = (0.02, 2e-6);
+        let offset = |turns: f64| {
+            let d = turns * b;
+            let text = format!(
+                "[tape]\nouter_radius_m = {}\nthickness_m = {b}\nmass_kg = 0.1\n\
+                 core_radius_m = {}\n[push]\ncontact_speed_m_s = 2e-5\n\
+                 [stop]\nbang_radius_m = {}\n",
+                r + 0.5 * (b + d),
+                r - 0.5 * (b + d),
+                r - 0.5 * d + 0.03 * d
+            );
+            let rv = rivals(&scene(&text));
+            let t = |label: &str| {
+                rv.iter()
+                    .find(|x| x.label == label)
+                    .unwrap()
+                    .time_at_fraction(0.5)
+                    .unwrap()
+            };
+            t("exact") / t("eq.79") - 1.0
+        };
+        let (quarter, half) = (offset(39.25), offset(39.5));
+        assert!(
+            quarter > 0.05 && half < -0.02,
+            "39.25: {quarter:+.3}, 39.5: {half:+.3}"
+        );
+    }
+
+    #[test]
     fn uphill_torque_form_stalls_where_its_first_integral_vanishes() {
         // Eq. (68) on -2 degrees with a 0.01 m/s push: r'^2 r^(20/3) falls to zero almost at
         // once, so the torque analysis says the mat stops.
