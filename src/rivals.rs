@@ -293,6 +293,24 @@ pub fn slope_energy_rdot(p: Params, slope_rad: f64) -> impl Fn(f64) -> f64 {
     move |r: f64| (2.0 * (e0 - potential(r)) / inertia(r)).sqrt()
 }
 
+/// `|r'|(r)` of eq. (72) as printed (coefficient `4 pi` of the slope term, ERRATA A11), which
+/// has no energy integral: `w = r'^2` is integrated in `u = R - r` by RK4,
+/// `dw/du = 2 [(12 pi^2 r^2 + b^2) w + 3 b^2 g r cos(a) + 4 pi g b r^2 sin(a)] / ((6 pi^2 r^2 + b^2) r)`.
+fn eq72_printed_rdot(p: Params, slope_rad: f64) -> impl Fn(f64) -> f64 {
+    let (big_r, b, g) = (p.outer_radius_m, p.thickness_m, p.g_m_s2);
+    let (sa, ca) = slope_rad.sin_cos();
+    let rdot0 = b * p.push_speed_m_s / (2.0 * PI * big_r);
+    let u_end = big_r * (1.0 - (1.0 - F_END).sqrt());
+    let table = tabulate_w(rdot0 * rdot0, u_end, 100_000, |u, w| {
+        let r = big_r - u;
+        let k = 6.0 * PI * PI * r * r;
+        2.0 * ((2.0 * k + b * b) * w + 3.0 * b * b * g * r * ca + 4.0 * PI * g * b * r * r * sa)
+            / ((k + b * b) * r)
+    });
+    let spin = table_spin(table, u_end);
+    move |r: f64| spin(big_r - r)
+}
+
 /// First integrals of the torque-type equations `r r'' + k r'^2 + c = 0` with
 /// `c = g b sin(a) / (3 pi)`: `r'^2 r^(2k) = r0'^2 R^(2k) + (c / k) (R^(2k) - r^(2k))`.
 /// `k = 10/3` is eq. (68); `k = 2` is eq. (73) corrected per ERRATA A12.
@@ -317,6 +335,12 @@ fn slope_rivals(scene: &Scene, p: Params) -> Vec<Rival> {
             "eq. (72) with 2 pi g b r^2 sin(a) (ERRATA A11), energy integral (70)",
             false,
             q_rate_from_rdot(big_r, slope_energy_rdot(p, a)),
+        ),
+        from_rate(
+            "eq.72 print",
+            "eq. (72) as printed, with 4 pi g b r^2 sin(a): not the derivative of (70) (ERRATA A11)",
+            false,
+            q_rate_from_rdot(big_r, eq72_printed_rdot(p, a)),
         ),
         from_rate(
             "eq.73 A12",
@@ -354,10 +378,11 @@ pub fn single_turn_spin(r: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 {
 /// dw/dtheta = [w (2 - cos theta + sin theta / (2 pi - theta)) + (g/r)(1 - cos theta)]
 ///             / (2 pi - theta + sin theta)
 /// ```
-fn eq62_w(r: f64, g: f64, spin0: f64, theta_end: f64, n: usize) -> Vec<f64> {
+/// `lead` is the constant of the `theta'^2` coefficient: 2 corrected, 1 as printed.
+fn eq62_w(r: f64, g: f64, spin0: f64, theta_end: f64, n: usize, lead: f64) -> Vec<f64> {
     tabulate_w(spin0 * spin0, theta_end, n, |theta, w| {
         let left = 2.0 * PI - theta;
-        (w * (2.0 - theta.cos() + theta.sin() / left) + g / r * (1.0 - theta.cos()))
+        (w * (lead - theta.cos() + theta.sin() / left) + g / r * (1.0 - theta.cos()))
             / (left + theta.sin())
     })
 }
@@ -455,7 +480,8 @@ fn single_turn_rivals(scene: &Scene) -> Vec<Rival> {
     let spin = single_turn_spin(r, g, w0);
     let theta_end = 2.0 * PI * F_END;
     let n = 200_000;
-    let eq62 = table_spin(eq62_w(r, g, w0, theta_end, n), theta_end);
+    let eq62 = table_spin(eq62_w(r, g, w0, theta_end, n, 2.0), theta_end);
+    let eq62_printed = table_spin(eq62_w(r, g, w0, theta_end, n, 1.0), theta_end);
     vec![
         from_rate(
             "eq.45",
@@ -469,6 +495,12 @@ fn single_turn_rivals(scene: &Scene) -> Vec<Rival> {
             "eq. (62), footnote 15's variable-mass Lagrangian, corrected per ERRATA A8",
             false,
             move |q| eq62(2.0 * PI * (1.0 - q)) / (2.0 * PI),
+        ),
+        from_rate(
+            "eq.62 print",
+            "eq. (62) as printed, with theta'^2 (1 - cos + sin / (2 pi - theta)) (ERRATA A8)",
+            false,
+            move |q| eq62_printed(2.0 * PI * (1.0 - q)) / (2.0 * PI),
         ),
     ]
 }
