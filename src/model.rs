@@ -441,7 +441,7 @@ impl Model {
             bang_started_s: 0.0,
             last_dt: 0.0,
             x_low: 0.0,
-            chord_ratio: 1.0,
+            chord_ratio,
             shedding: true,
             energy_j: 0.0,
         };
