@@ -7,10 +7,13 @@
 //! the summary).
 
 pub mod check;
+pub mod compare;
+pub mod forces;
 pub mod guard;
 pub mod model;
 pub mod output;
 pub mod reference;
+pub mod rivals;
 pub mod run;
 pub mod scene;
 pub mod spiral;

@@ -1,5 +1,5 @@
-//! The `uncoil` command line: `uncoil run SCENE [--out DIR]` and
-//! `uncoil check [DIR] [--out DIR]`.
+//! The `uncoil` command line: `uncoil run SCENE [--out DIR]`,
+//! `uncoil check [DIR] [--out DIR]` and `uncoil compare SCENE...`.
 //!
 //! Results go to stdout, diagnostics to stderr. Exit codes: 0 success, 1 a failure during
 //! the run (e.g. an output file could not be written), 2 bad input (scene or usage), 3 a
@@ -13,6 +13,7 @@ use anyhow::Context as _;
 use clap::{Parser, Subcommand};
 
 use uncoil::check;
+use uncoil::compare::{SampleLog, table};
 use uncoil::guard::Status;
 use uncoil::output::{CsvObserver, ReportObserver, summary};
 use uncoil::run::{Observer, run};
@@ -48,6 +49,13 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Run scenes and print the paradox table: milestone times of the simulation and of
+    /// every competing equation of motion for each scene, as markdown.
+    Compare {
+        /// The scene files (TOML), e.g. scenes/*.toml.
+        #[arg(required = true)]
+        scenes: Vec<PathBuf>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -78,6 +86,7 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Command::Compare { scenes } => compare(&scenes),
     }
 }
 
@@ -108,6 +117,33 @@ fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> ExitCode {
     } else {
         ExitCode::from(1)
     }
+}
+
+/// Loads every scene first (a bad one fails before anything runs), then runs each and
+/// prints its table as soon as it is done.
+fn compare(paths: &[PathBuf]) -> ExitCode {
+    let mut scenes = Vec::with_capacity(paths.len());
+    for path in paths {
+        match Scene::from_file(path) {
+            Ok(s) => scenes.push(s),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(2);
+            }
+        }
+    }
+    for scene in &scenes {
+        eprintln!("running {} ...", scene.name);
+        let mut log = SampleLog::default();
+        match run(scene, &mut [&mut log]) {
+            Ok(report) => println!("{}", table(&report, &log.samples)),
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                return ExitCode::from(1);
+            }
+        }
+    }
+    ExitCode::SUCCESS
 }
 
 /// Runs `scene` into its output folder; returns the summary, the status and the stop reason.

@@ -19,6 +19,11 @@
 //! - When the coil's equivalent radius reaches the bang radius, the remaining links are
 //!   released as a free chain and the final bang is resolved by contact.
 //!
+//! - Variants (App. A-E): a slope tilts gravity in this frame (the floor stays `y = b/2`);
+//!   a core makes a spool; with no friction the coil starts spinning in place; a sticky floor
+//!   holds the coil bilaterally at its contact; a fixed axis pins the spiral's centre and
+//!   turns the picture by a quarter turn, so the tape leaves at the side and hangs.
+//!
 //! Every change of energy is measured where it happens, into an [`EnergyLedger`].
 
 use std::collections::VecDeque;
@@ -97,6 +102,8 @@ pub struct Observation {
     pub max_penetration_m: f64,
     /// The last step's length (s).
     pub dt_s: f64,
+    /// Linear momentum of everything that moves, `sum m v` (kg m/s).
+    pub momentum_kg_m_s: [f64; 2],
 }
 
 /// Diagnostics of the world after a step, read by the run's guards ([`Model::health`]).
@@ -222,7 +229,12 @@ pub struct Model {
     /// Softness of every joint (see `Solver::joint_hz`).
     joint_softness: SpringCoefficients<Real>,
     friction: f64,
+    /// Gravity across the floor, `g cos(alpha)`, pulling towards it (m/s^2).
     g: f64,
+    /// Gravity along the floor, `g sin(alpha)`, towards +x (m/s^2); 0 on a level floor.
+    g_along: f64,
+    /// First moment `sum m_k x_k` of the tape lying flat from `x = 0` (kg m).
+    flat_first_moment: f64,
     half_b: f64,
     bang_fraction: f64,
     settle_time: f64,
@@ -232,11 +244,17 @@ pub struct Model {
     floor: ColliderHandle,
     coil: Option<RigidBodyHandle>,
     coil_ball: Option<ColliderHandle>,
+    /// A sticky floor's hold on the coil, moved every step: no slip at the contact line
+    /// (x locked) and the contact ball's centre at its height (y locked).
+    stick: Option<[ImpulseJointHandle; 2]>,
     coil_sums: CoilSums,
     /// Index of the outermost link still in the coil.
     first_attached: usize,
     /// Unwrapped rotation angle of the coil (rad).
     coil_angle: f64,
+    /// The coil's rotation minus that of a rolling coil with the same point leaving it:
+    /// 0 on the floor, pi/2 on a fixed axis, where the tape leaves at the side (rad).
+    angle_offset: f64,
     psi_low: f64,
 
     free: VecDeque<FreeLink>,
@@ -284,7 +302,10 @@ impl Model {
         }
 
         let mut world = PhysicsWorld::new();
-        world.gravity = Vector::new(0.0, -scene.g_m_s2);
+        // A slope tilts gravity in the simulation frame; the floor stays the plane y = b/2.
+        let (sin_a, cos_a) = scene.slope_deg.to_radians().sin_cos();
+        let (g_along, g_perp) = (scene.g_m_s2 * sin_a, scene.g_m_s2 * cos_a);
+        world.gravity = Vector::new(g_along, -g_perp);
         let ip = &mut world.integration_parameters;
         ip.num_solver_iterations = scene.solver.iterations as usize;
         // The engine's tolerances (contact prediction, corrective speed) are fractions of
@@ -305,9 +326,15 @@ impl Model {
         ip.contact_softness = floor_soft;
 
         let ground = world.insert_body(RigidBodyBuilder::fixed());
+        // On a fixed axis the tape hangs freely: the floor is put out of its reach.
+        let floor_y = if scene.fixed_axis {
+            -(spiral.length() + tape.outer_radius_m + 1.0)
+        } else {
+            0.5 * b
+        };
         let floor = world.insert_collider(
             ColliderBuilder::new(SharedShape::halfspace(Vector::Y))
-                .translation(Vector::new(0.0, 0.5 * b))
+                .translation(Vector::new(0.0, floor_y))
                 .friction(scene.friction)
                 .collision_groups(InteractionGroups::new(
                     FLOOR_GROUP,
@@ -336,7 +363,23 @@ impl Model {
         let com_local = mprops.local_com;
         let com = rotate([com_local.x, com_local.y], coil_angle);
         let rel = [origin[0] + com[0], origin[1] + com[1] - 0.5 * b];
-        let linvel = Vector::new(-omega * rel[1], omega * rel[0]);
+        // Without friction nothing can make it roll: it starts spinning in place (App. D),
+        // its surface moving at the push speed.
+        let linvel = if scene.friction > 0.0 {
+            Vector::new(-omega * rel[1], omega * rel[0])
+        } else {
+            Vector::ZERO
+        };
+        // On a fixed axis (App. E) the picture is turned by a quarter turn about the spiral's
+        // centre, which stays at the origin: the tape leaves at the right and hangs down.
+        let angle_offset = if scene.fixed_axis { 0.5 * PI } else { 0.0 };
+        let (origin, coil_angle, linvel) = if scene.fixed_axis {
+            let angle = coil_angle + angle_offset;
+            let c = rotate([com_local.x, com_local.y], angle);
+            ([0.0, 0.0], angle, Vector::new(-omega * c[1], omega * c[0]))
+        } else {
+            (origin, coil_angle, linvel)
+        };
         let coil = world.insert_body(
             RigidBodyBuilder::dynamic()
                 .pose(Pose::new(Vector::new(origin[0], origin[1]), coil_angle))
@@ -345,6 +388,16 @@ impl Model {
                 .angvel(omega)
                 .can_sleep(false),
         );
+        if scene.fixed_axis {
+            world.insert_impulse_joint(
+                ground,
+                coil,
+                RevoluteJointBuilder::new()
+                    .local_anchor1(Vector::ZERO)
+                    .local_anchor2(Vector::ZERO)
+                    .contacts_enabled(false),
+            );
+        }
         let coil_ball = world.insert_collider(
             Self::ball_builder(&spiral, psi_low, first.chord_ratio, scene.friction),
             Some(coil),
@@ -352,8 +405,35 @@ impl Model {
         // The engine computes mass properties lazily at the next step; energies are read
         // before that, so compute them now.
         world.bodies[coil].recompute_mass_properties_from_colliders(&world.colliders);
+        // A sticky floor holds the coil bilaterally where a floor contact only pushes; the
+        // anchors are set by `restick` before the first step.
+        let stick = scene.sticky.then(|| {
+            [JointAxesMask::LIN_X, JointAxesMask::LIN_Y].map(|axis| {
+                world.insert_impulse_joint(
+                    ground,
+                    coil,
+                    GenericJointBuilder::new(axis).contacts_enabled(false),
+                )
+            })
+        });
 
         let bang_r = scene.stop.bang_radius_m;
+        let bang_fraction = if tape.core_radius_m > 0.0 {
+            // On a core the mass is not spread over a disc: use the spiral's own laid
+            // fraction at the midline radius bang_r.
+            let psi = spiral
+                .psi_at_radius(bang_r)
+                .clamp(spiral.psi_in, spiral.psi_out);
+            1.0 - moments.at(psi)[0] / spiral.length()
+        } else {
+            1.0 - (bang_r / tape.outer_radius_m).powi(2)
+        };
+        let mut laid_x = 0.0;
+        let mut flat_first_moment = 0.0;
+        for link in &links {
+            flat_first_moment += link.mass_kg * (laid_x + 0.5 * link.length_m);
+            laid_x += link.length_m;
+        }
         let mut model = Self {
             world,
             spiral,
@@ -369,18 +449,22 @@ impl Model {
                 SpringCoefficients::<Real>::joint_defaults().damping_ratio,
             ),
             friction: scene.friction,
-            g: scene.g_m_s2,
+            g: g_perp,
+            g_along,
+            flat_first_moment,
             half_b: 0.5 * b,
-            bang_fraction: 1.0 - (bang_r / tape.outer_radius_m).powi(2),
+            bang_fraction,
             settle_time: scene.stop.settle_time_s,
             total_mass: tape.mass_kg,
             ground,
             floor,
             coil: Some(coil),
             coil_ball: Some(coil_ball),
+            stick,
             coil_sums,
             first_attached: 0,
             coil_angle,
+            angle_offset,
             psi_low,
             free: VecDeque::new(),
             frozen_potential_j: 0.0,
@@ -390,10 +474,11 @@ impl Model {
             bang_started_s: 0.0,
             last_dt: 0.0,
             x_low: 0.0,
-            chord_ratio: 1.0,
+            chord_ratio: first.chord_ratio,
             shedding: true,
             energy_j: 0.0,
         };
+        model.restick();
         model.energy_j = model.total_energy();
         model
     }
@@ -438,9 +523,15 @@ impl Model {
                 continue;
             }
             kinetic += body.kinetic_energy();
-            potential += body.mass() * self.g * body.center_of_mass().y;
+            potential += self.potential_of(body);
         }
         (kinetic, potential)
+    }
+
+    /// Potential energy `-m g.p` of one body, gravity tilted on a slope (J).
+    fn potential_of(&self, body: &RigidBody) -> f64 {
+        let c = body.center_of_mass();
+        body.mass() * self.g * c.y - body.mass() * self.g_along * c.x
     }
 
     fn total_energy(&self) -> f64 {
@@ -493,7 +584,7 @@ impl Model {
             self.coil_angle += d;
             self.psi_low = self
                 .spiral
-                .lowest_psi(self.coil_angle, self.psi_low)
+                .lowest_psi(self.coil_angle - self.angle_offset, self.psi_low)
                 .clamp(self.spiral.psi_in, self.spiral.psi_out);
             while self.shedding
                 && self.first_attached + 1 < self.links.len()
@@ -546,6 +637,33 @@ impl Model {
             self.spiral.curvature_radius(self.psi_low) * self.chord_ratio,
         ));
         collider.set_position_wrt_parent(Pose::from_translation(Vector::new(c[0], c[1])));
+        self.restick();
+    }
+
+    /// Moves a sticky floor's hold to the coil's current contact: x is locked at the material
+    /// point under the ball's centre (no slip: a rolling contact point has zero velocity and
+    /// zero horizontal acceleration), y at the ball's centre (its height is fixed, while the
+    /// contact point itself accelerates upward, so pinning it in y would brake the roll).
+    fn restick(&mut self) {
+        let (Some([hold_x, hold_y]), Some(coil)) = (self.stick, self.coil) else {
+            return;
+        };
+        let c = self.spiral.curvature_centre(self.psi_low);
+        let rho = self.spiral.curvature_radius(self.psi_low) * self.chord_ratio;
+        let pose = *self.world.bodies[coil].position();
+        let centre = pose.transform_point(Vector::new(c[0], c[1]));
+        let contact = Vector::new(centre.x, self.half_b);
+        let under = pose.inverse_transform_point(Vector::new(centre.x, centre.y - rho));
+        if let Some(joint) = self.world.impulse_joints.get_mut(hold_x, false) {
+            joint.data.set_local_anchor1(contact);
+            joint.data.set_local_anchor2(under);
+        }
+        if let Some(joint) = self.world.impulse_joints.get_mut(hold_y, false) {
+            joint
+                .data
+                .set_local_anchor1(Vector::new(centre.x, self.half_b + rho));
+            joint.data.set_local_anchor2(Vector::new(c[0], c[1]));
+        }
     }
 
     /// Creates the body of link `k` with the coil's velocity field.
@@ -738,7 +856,7 @@ impl Model {
                 break;
             }
             let kinetic = body.kinetic_energy();
-            self.frozen_potential_j += body.mass() * self.g * body.center_of_mass().y;
+            self.frozen_potential_j += self.potential_of(body);
             self.world.remove_body(oldest.body);
             self.free.pop_front();
             if let Some(next) = self.free.front().copied() {
@@ -762,6 +880,19 @@ impl Model {
                 _ => self.ledger.bang_j += kinetic,
             }
         }
+    }
+
+    /// Linear momentum of the dynamic bodies (kg m/s).
+    fn momentum(&self) -> [f64; 2] {
+        let mut p = [0.0, 0.0];
+        for (_, body) in self.world.bodies.iter() {
+            if body.is_dynamic() {
+                let v = body.linvel();
+                p[0] += body.mass() * v.x;
+                p[1] += body.mass() * v.y;
+            }
+        }
+        p
     }
 
     /// Floor forces on the moving tape from the last step's contact impulses (N).
@@ -830,12 +961,13 @@ impl Model {
             max_joint_gap_m: self.max_joint_gap(),
             max_penetration_m: self.max_penetration(),
             dt_s: self.last_dt,
+            momentum_kg_m_s: self.momentum(),
         }
     }
 
-    /// Potential energy of the tape lying flat, midline at `b/2` (J).
+    /// Potential energy of the tape lying flat, midline at `b/2`, from `x = 0` on (J).
     pub fn flat_potential_j(&self) -> f64 {
-        self.total_mass * self.g * self.half_b
+        self.total_mass * self.g * self.half_b - self.g_along * self.flat_first_moment
     }
 
     /// What the run's guards read after a step: slip at the rolling contact, how far the

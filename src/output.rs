@@ -16,7 +16,7 @@ use crate::run::{Observer, RunReport, Sample};
 use crate::scene::Scene;
 
 /// Column names of `samples.csv`, in order.
-pub const CSV_COLUMNS: [&str; 29] = [
+pub const CSV_COLUMNS: [&str; 36] = [
     "t_s",
     "laid_fraction",
     "r_m",
@@ -43,12 +43,19 @@ pub const CSV_COLUMNS: [&str; 29] = [
     "xdot_geo_m_s",
     "kinetic_geo_j",
     "r_ft_m",
+    "laid_fraction_ref",
+    "theta_rad",
+    "theta_ref_rad",
+    "n_tot_n",
+    "f_tot_n",
+    "n_tot_ref_n",
+    "f_tot_ref_n",
     "active_bodies",
     "max_joint_gap_m",
     "max_penetration_m",
 ];
 
-fn sample_values(s: &Sample) -> [f64; 29] {
+fn sample_values(s: &Sample) -> [f64; 36] {
     #[allow(clippy::cast_precision_loss)]
     let bodies = s.active_bodies as f64;
     [
@@ -78,6 +85,13 @@ fn sample_values(s: &Sample) -> [f64; 29] {
         s.xdot_geo_m_s,
         s.kinetic_geo_j,
         s.r_ft_m,
+        s.laid_fraction_ref,
+        s.theta_rad,
+        s.theta_ref_rad,
+        s.n_tot_n,
+        s.f_tot_n,
+        s.n_tot_ref_n,
+        s.f_tot_ref_n,
         bodies,
         s.max_joint_gap_m,
         s.max_penetration_m,
@@ -343,7 +357,7 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
     );
     let _ = writeln!(
         o,
-        "Max energy rise above E0 {:+.2e} of E0 (bound {:.0e}); fastest spin {:.4e} rad/s.",
+        "Max energy rise above E0 {:+.2e} of max(|E0|, MgR) (bound {:.0e}); fastest spin {:.4e} rad/s.",
         report.max_energy_rise_rel,
         crate::guard::ENERGY_RISE_TOLERANCE,
         report.max_spin_rad_s

@@ -56,14 +56,14 @@ pub struct RefState {
 /// `q` falls monotonically from `q0`; the grid is uniform in `u = sqrt(q0 - q)`, so a start
 /// from rest (`|q'| ~ sqrt(q0 - q)`) is integrated without loss of order.
 #[derive(Debug, Clone)]
-struct Trajectory {
+pub(crate) struct Trajectory {
     q0: f64,
     /// `(u, t, dt/du)` at each node.
     nodes: Vec<[f64; 3]>,
 }
 
 impl Trajectory {
-    fn new(q0: f64, q_end: f64, panels: usize, rate: impl Fn(f64) -> f64) -> Self {
+    pub(crate) fn new(q0: f64, q_end: f64, panels: usize, rate: impl Fn(f64) -> f64) -> Self {
         let u_end = (q0 - q_end).max(0.0).sqrt();
         #[allow(clippy::cast_precision_loss)]
         let du = u_end / panels as f64;
@@ -90,7 +90,7 @@ impl Trajectory {
     }
 
     /// Time at which `q` is reached, `None` beyond the tabulated end.
-    fn time_at(&self, q: f64) -> Option<f64> {
+    pub(crate) fn time_at(&self, q: f64) -> Option<f64> {
         if q > self.q0 || q < self.q_end() {
             return None;
         }
@@ -104,7 +104,7 @@ impl Trajectory {
     }
 
     /// `q` at time `t`, `None` beyond the tabulated end.
-    fn q_at(&self, t: f64) -> Option<f64> {
+    pub(crate) fn q_at(&self, t: f64) -> Option<f64> {
         if t < 0.0 || t > self.duration() {
             return None;
         }
@@ -330,9 +330,23 @@ impl ForceTorque {
 /// ```
 /// `I_P` is the coil's moment of inertia about the peel point. This model differs from the
 /// continuum (7) at first order in `b/R`.
+///
+/// On a slope of angle `alpha` (positive when +x is downhill, App. B) gravity is tilted,
+/// `g = g (sin alpha, -cos alpha)`, and the potential energy is `-m g.p` of the coil and of the
+/// laid tape, which lies from `x = 0` to the peel point `x = s(psi)` (the laid arc length):
+/// ```text
+/// V = g cos(alpha) [m y_cm + (M - m) b / 2] - g sin(alpha) [m x_cm + lambda s^2 / 2]
+/// ```
 #[derive(Debug, Clone)]
 pub struct ExactGeometry {
     p: Params,
+    /// `g sin(alpha)`, along +x (m/s^2).
+    g_along: f64,
+    /// `g cos(alpha)`, towards the floor (m/s^2).
+    g_perp: f64,
+    /// Frictionless floor: the coil slides, the flat tape slides back as a whole, and the
+    /// total horizontal momentum stays zero (see [`Self::frictionless`]).
+    sliding: bool,
     spiral: Spiral,
     moments: SpiralMoments,
     line_density_kg_m: f64,
@@ -348,17 +362,55 @@ struct Pose {
     inertia_peel: f64,
     /// Height of the coil's centre of mass (m).
     y_cm: f64,
+    /// Horizontal position of the coil's centre of mass, from the tape's outer end (m).
+    x_cm: f64,
+    /// Laid length, the peel point's x (m).
+    laid_m: f64,
 }
 
 impl ExactGeometry {
     /// Tabulates the model from the full coil down to the parameter where the continuum
     /// equivalent radius `R sqrt(1 - f)` reaches `r_end_m`.
     pub fn new(p: Params, r_end_m: f64) -> Self {
+        Self::on_slope(p, 0.0, r_end_m)
+    }
+
+    /// As [`Self::new`], on a floor sloping by `slope_rad` (positive: +x downhill).
+    pub fn on_slope(p: Params, slope_rad: f64, r_end_m: f64) -> Self {
+        Self::to_fraction(p, slope_rad, 1.0 - (r_end_m / p.outer_radius_m).powi(2))
+    }
+
+    /// As [`Self::on_slope`], tabulated up to the laid fraction `f_end` (for a spool, whose
+    /// laid fraction is not `1 - (r/R)^2`).
+    pub fn to_fraction(p: Params, slope_rad: f64, f_end: f64) -> Self {
+        Self::build(p, slope_rad, f_end, false)
+    }
+
+    /// The same rigid spiral on a frictionless level floor (App. D), started spinning in
+    /// place at the push speed. The material at the contact slips at a speed `u` along the
+    /// floor, the flat tape, attached there, slides back with it (its material velocity,
+    /// ERRATA A18, A19), and the total horizontal momentum stays zero. With `c` the coil's
+    /// centre of mass relative to the peel point and `omega` its spin:
+    /// ```text
+    /// m (u - omega c_y) + (M - m) u = 0                 =>  u = omega m c_y / M
+    /// T = [m ((u - omega c_y)^2 + omega^2 c_x^2) + I_cm omega^2 + (M - m) u^2] / 2
+    /// ```
+    /// which for a thin spool (`c = (0, r)`, `I_cm = m r^2`) is A18's `M r^2 theta'^2 (1 - u^2) / 2`.
+    /// Energy is conserved. Tabulated to `f_end`.
+    pub fn frictionless(p: Params, f_end: f64) -> Self {
+        Self::build(p, 0.0, f_end, true)
+    }
+
+    fn build(p: Params, slope_rad: f64, f_end: f64, sliding: bool) -> Self {
         let spiral = Spiral::wound(p.outer_radius_m, p.thickness_m, p.core_radius_m);
         let moments = SpiralMoments::new(spiral);
         let line_density_kg_m = p.mass_kg / spiral.length();
+        let (sin_a, cos_a) = slope_rad.sin_cos();
         let mut model = Self {
             p,
+            g_along: p.g_m_s2 * sin_a,
+            g_perp: p.g_m_s2 * cos_a,
+            sliding,
             spiral,
             moments,
             line_density_kg_m,
@@ -371,9 +423,9 @@ impl ExactGeometry {
         let psi0 = spiral.psi_out;
         let psidot0 = p.push_speed_m_s / (spiral.a_m * (1.0 + psi0 * psi0).sqrt());
         let pose0 = model.pose(psi0);
-        let w0 = Spiral::turn_rate(psi0) * psidot0;
-        model.energy_j = 0.5 * pose0.inertia_peel * w0 * w0 + model.potential(psi0, &pose0);
-        let psi_end = model.psi_at_fraction(1.0 - (r_end_m / p.outer_radius_m).powi(2));
+        model.energy_j = 0.5 * model.inertia_psi(psi0, &pose0) * psidot0 * psidot0
+            + model.potential(psi0, &pose0);
+        let psi_end = model.psi_at_fraction(f_end);
         let traj = Trajectory::new(psi0, psi_end, 6000, |psi| model.psidot(psi));
         model.traj = traj;
         model
@@ -402,24 +454,49 @@ impl ExactGeometry {
         } else {
             [0.0, 0.0]
         };
+        let laid_m = self.spiral.arc(psi, self.spiral.psi_out);
         Pose {
             mass_kg,
             inertia_peel,
             y_cm: 0.5 * self.p.thickness_m + rel[1],
+            x_cm: laid_m + rel[0],
+            laid_m,
         }
     }
 
     fn potential(&self, _psi: f64, pose: &Pose) -> f64 {
-        let g = self.p.g_m_s2;
-        g * (pose.mass_kg * pose.y_cm + (self.p.mass_kg - pose.mass_kg) * 0.5 * self.p.thickness_m)
+        let g = self.g_perp;
+        let across = g
+            * (pose.mass_kg * pose.y_cm
+                + (self.p.mass_kg - pose.mass_kg) * 0.5 * self.p.thickness_m);
+        let along =
+            pose.mass_kg * pose.x_cm + 0.5 * self.line_density_kg_m * pose.laid_m * pose.laid_m;
+        across - self.g_along * along
     }
 
     /// `|psi'|` from the energy integral (rad/s).
     fn psidot(&self, psi: f64) -> f64 {
         let pose = self.pose(psi);
         let kin = (self.energy_j - self.potential(psi, &pose)).max(0.0);
+        (2.0 * kin / self.inertia_psi(psi, &pose)).sqrt()
+    }
+
+    /// `2 T / psi'^2` (kg m^2): `I_P w^2` when rolling, the sliding form of
+    /// [`Self::frictionless`] otherwise.
+    fn inertia_psi(&self, psi: f64, pose: &Pose) -> f64 {
         let w = Spiral::turn_rate(psi);
-        (2.0 * kin / (pose.inertia_peel * w * w)).sqrt()
+        if !self.sliding {
+            return pose.inertia_peel * w * w;
+        }
+        let (m, big_m) = (pose.mass_kg, self.p.mass_kg);
+        let c = [
+            pose.x_cm - pose.laid_m,
+            pose.y_cm - 0.5 * self.p.thickness_m,
+        ];
+        let i_cm = pose.inertia_peel - m * (c[0] * c[0] + c[1] * c[1]);
+        // Slip speed of the contact material point over the spin, from zero momentum.
+        let mu = m * c[1] / big_m;
+        w * w * (m * ((mu - c[1]).powi(2) + c[0] * c[0]) + i_cm + (big_m - m) * mu * mu)
     }
 
     /// Laid mass fraction when the lowest point is at `psi`.
@@ -456,8 +533,17 @@ impl ExactGeometry {
             t_s,
             laid_fraction: f,
             r_m: self.p.outer_radius_m * (1.0 - f).max(0.0).sqrt(),
-            x_m: self.spiral.arc(psi, self.spiral.psi_out),
-            xdot_m_s: self.spiral.a_m * (1.0 + psi * psi).sqrt() * psidot,
+            // Sliding, the contact line is not the laid length (not tabulated).
+            x_m: if self.sliding {
+                f64::NAN
+            } else {
+                self.spiral.arc(psi, self.spiral.psi_out)
+            },
+            xdot_m_s: if self.sliding {
+                f64::NAN
+            } else {
+                self.spiral.a_m * (1.0 + psi * psi).sqrt() * psidot
+            },
             omega_rad_s: Spiral::turn_rate(psi) * psidot,
             kinetic_j: (self.energy_j - potential_j).max(0.0),
             potential_j,
@@ -484,7 +570,7 @@ impl ExactGeometry {
             -self.pose(q).mass_kg * dy * self.psidot(q)
         };
         let dp_dpsi = (momentum(psi + h) - momentum(psi - h)) / (2.0 * h);
-        self.pose(psi).mass_kg * self.p.g_m_s2 - self.psidot(psi) * dp_dpsi
+        self.pose(psi).mass_kg * self.g_perp - self.psidot(psi) * dp_dpsi
     }
 
     /// The first laid fraction at which the rolling spiral would need a floor that pulls
@@ -628,6 +714,32 @@ mod tests {
         );
         assert_relative_eq!(ft.time_at_radius(r), t, max_relative = 1e-9);
         assert_relative_eq!(-rp, ft.rdot(r), max_relative = 1e-6);
+    }
+
+    #[test]
+    fn sliding_kinetic_energy_of_a_thin_spool_is_errata_a18() {
+        // 2 T / omega^2 = M r^2 (1 - f^2) for a thin spool (ERRATA A18), f the laid fraction,
+        // while many turns remain (with 3 turns left, at f = 0.8, the unbalanced partial turn
+        // already moves it by 4 %).
+        let p = Params {
+            outer_radius_m: 0.020_016_915_494,
+            thickness_m: 2e-6,
+            mass_kg: 0.1,
+            core_radius_m: 0.019_983_084_506,
+            g_m_s2: 9.81,
+            push_speed_m_s: 0.002,
+        };
+        let e = ExactGeometry::frictionless(p, 0.9);
+        for f in [0.1, 0.3, 0.5] {
+            let psi = e.psi_at_fraction(f);
+            let w = Spiral::turn_rate(psi);
+            let per_omega2 = e.inertia_psi(psi, &e.pose(psi)) / (w * w);
+            let a18 = 0.1 * 0.02f64.powi(2) * (1.0 - f * f);
+            assert!(
+                (per_omega2 / a18 - 1.0).abs() < 0.01,
+                "f = {f}: {per_omega2:.4e} vs A18 {a18:.4e}"
+            );
+        }
     }
 
     #[test]

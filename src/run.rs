@@ -6,9 +6,11 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::forces::{ForceFn, force_reference};
 use crate::guard::{Applicability, Bounds, Guard, ReferenceLimit, Status};
 use crate::model::{EnergyLedger, Model, Observation, Phase};
 use crate::reference::{Continuum, ExactGeometry, ForceTorque, Params};
+use crate::rivals::{Rival, SpoolGeometry, rivals};
 use crate::scene::Scene;
 
 /// One row of output: the simulation and its references at the same instant.
@@ -66,6 +68,22 @@ pub struct Sample {
     pub kinetic_geo_j: f64,
     /// Eq. (17): coil radius (m).
     pub r_ft_m: f64,
+    /// The scene's valid reference (see `rivals`): laid fraction at this time, `NaN` where
+    /// it has none or past its end.
+    pub laid_fraction_ref: f64,
+    /// Spools: angle unrolled, `theta = f l / r` (rad); `NaN` for a solid coil.
+    pub theta_rad: f64,
+    /// Spools: the valid reference's `theta` at this time (rad).
+    pub theta_ref_rad: f64,
+    /// Total upward force on the coil from the momentum balance of the moving tape over
+    /// the last sample interval, `dP_y/dt + m g cos(a)` (N).
+    pub n_tot_n: f64,
+    /// Total horizontal force on the coil, `dP_x/dt - m g sin(a)`, +x positive (N).
+    pub f_tot_n: f64,
+    /// The case's analytic `N_tot` at the simulation's laid fraction (see `forces`) (N).
+    pub n_tot_ref_n: f64,
+    /// The case's analytic `F_tot` at the simulation's laid fraction (N).
+    pub f_tot_ref_n: f64,
     /// Bodies in the engine.
     pub active_bodies: usize,
     /// Largest joint separation (m).
@@ -155,14 +173,14 @@ pub struct RunReport {
     pub stop_reason: String,
     /// The guards' bounds the run was held to.
     pub bounds: Bounds,
-    /// Largest rise of the total energy above E0 over the run, over E0 (0 if it never
-    /// rose).
+    /// Largest rise of the total energy above E0 over the run, over the scene's energy scale,
+    /// the larger of |E0| and M g R (0 if it never rose).
     pub max_energy_rise_rel: f64,
     /// Fastest spin of any body over the run (rad/s).
     pub max_spin_rad_s: f64,
     /// Where the references stop applying (slip, bunching, lift-off, r ~ b, ...).
     pub reference_limits: Vec<ReferenceLimit>,
-    /// Milestones at 0.75R, 0.5R, 0.25R, 0.1R and 2b.
+    /// Milestones at 0.75R, 0.5R, 0.25R, 0.1R and 2b (a spool: at laid fractions 0.25 to 0.9).
     pub milestones: Vec<Milestone>,
     /// The energy ledger.
     pub ledger: Ledger,
@@ -192,6 +210,14 @@ pub struct References {
     pub force_torque: ForceTorque,
     /// The exact-geometry model.
     pub exact: ExactGeometry,
+    /// The scene's valid reference among the paper's rivals, if it has one.
+    pub valid: Option<Rival>,
+    /// The case's analytic constraint forces.
+    pub forces: Option<ForceFn>,
+    /// Spools: `l / r`, the angle of the whole tape (rad).
+    pub theta_per_fraction: Option<f64>,
+    /// `(g sin a, g cos a)` (m/s^2).
+    pub gravity_along_across: (f64, f64),
 }
 
 impl References {
@@ -202,8 +228,34 @@ impl References {
         Self {
             continuum: Continuum::new(p, r_end),
             force_torque: ForceTorque::new(p),
-            exact: ExactGeometry::new(p, r_end),
+            exact: exact_geometry(scene),
+            valid: rivals(scene).into_iter().find(|r| r.valid),
+            forces: force_reference(scene),
+            theta_per_fraction: (scene.tape.core_radius_m > 0.0).then(|| {
+                let sg = SpoolGeometry::of(scene);
+                sg.l_m / sg.r_m
+            }),
+            gravity_along_across: {
+                let (s, c) = scene.slope_deg.to_radians().sin_cos();
+                (scene.g_m_s2 * s, scene.g_m_s2 * c)
+            },
         }
+    }
+}
+
+/// The exact-geometry model of a scene, on its slope or sliding on a frictionless floor,
+/// tabulated to half the bang radius (a solid coil) or to 99.5 % laid (a spool).
+pub fn exact_geometry(scene: &Scene) -> ExactGeometry {
+    let (p, slope) = (params(scene), scene.slope_deg.to_radians());
+    let f_end = if scene.tape.core_radius_m > 0.0 {
+        0.995
+    } else {
+        1.0 - (0.5 * scene.stop.bang_radius_m / scene.tape.outer_radius_m).powi(2)
+    };
+    if scene.friction <= 0.0 {
+        ExactGeometry::frictionless(p, f_end)
+    } else {
+        ExactGeometry::to_fraction(p, slope, f_end)
     }
 }
 
@@ -219,9 +271,20 @@ pub fn params(scene: &Scene) -> Params {
     }
 }
 
+/// Laid fractions of the milestones of a spool (a scene with a core).
+pub const SPOOL_FRACTIONS: [f64; 4] = [0.25, 0.5, 0.75, 0.9];
+
 /// The milestone radii of a scene with their labels.
 pub fn milestone_radii(scene: &Scene) -> Vec<(String, f64)> {
     let big_r = scene.tape.outer_radius_m;
+    if scene.tape.core_radius_m > 0.0 {
+        // On a spool the radius hardly changes: milestones at laid fractions f, given as
+        // the continuum-equivalent radius R sqrt(1 - f) the loop converts back.
+        return SPOOL_FRACTIONS
+            .iter()
+            .map(|f| (format!("f={f}"), big_r * (1.0 - f).sqrt()))
+            .collect();
+    }
     let mut v: Vec<(String, f64)> = [0.75, 0.5, 0.25, 0.1]
         .iter()
         .map(|k| (format!("{k}R"), k * big_r))
@@ -267,6 +330,8 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
     let mut wall_rolling = None;
     let mut max_gap: f64 = 0.0;
     let mut max_pen: f64 = 0.0;
+    // Momentum and time at the last sample, for the force balance over the interval.
+    let mut at_last_sample = (model.observe().momentum_kg_m_s, 0.0);
     let stop_reason;
     loop {
         let start = Instant::now();
@@ -317,7 +382,17 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
         let timed_out = obs.t_s >= scene.stop.max_time_s;
         prev_logged = obs.t_s >= next_sample || done || timed_out || tripped.is_some();
         if prev_logged {
-            let sample = make_sample(&obs, xdot, e0, &refs);
+            let mut sample = make_sample(&obs, xdot, e0, &refs);
+            let (p0, t0) = at_last_sample;
+            let span = obs.t_s - t0;
+            if span > 0.0 {
+                let coil_mass = scene.tape.mass_kg * (1.0 - obs.laid_fraction).max(0.0);
+                let (g_along, g_across) = refs.gravity_along_across;
+                let p = obs.momentum_kg_m_s;
+                sample.n_tot_n = (p[1] - p0[1]) / span + coil_mass * g_across;
+                sample.f_tot_n = (p[0] - p0[0]) / span - coil_mass * g_along;
+            }
+            at_last_sample = (obs.momentum_kg_m_s, obs.t_s);
             for o in observers.iter_mut() {
                 o.observe_sample(&sample)?;
             }
@@ -405,7 +480,8 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
         status,
         stop_reason,
         bounds: guard.bounds,
-        max_energy_rise_rel: guard.max_energy_rise_j / e0.abs(),
+        max_energy_rise_rel: guard.max_energy_rise_j * crate::guard::ENERGY_RISE_TOLERANCE
+            / guard.bounds.energy_rise_j,
         max_spin_rad_s: guard.max_spin_rad_s,
         reference_limits: limits.finish(),
         milestones,
@@ -425,6 +501,12 @@ fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &References) -> Samp
     let c = refs.continuum.state_at_time(obs.t_s);
     let g = refs.exact.state_at_time(obs.t_s);
     let r_ref = c.map_or(nan, |s| s.r_m);
+    let f_ref = refs
+        .valid
+        .as_ref()
+        .and_then(|r| r.fraction_at_time(obs.t_s))
+        .unwrap_or(nan);
+    let forces = refs.forces.as_ref().and_then(|f| f(obs.laid_fraction));
     Sample {
         t_s: obs.t_s,
         laid_fraction: obs.laid_fraction,
@@ -452,6 +534,15 @@ fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &References) -> Samp
         xdot_geo_m_s: g.map_or(nan, |s| s.xdot_m_s),
         kinetic_geo_j: g.map_or(nan, |s| s.kinetic_j),
         r_ft_m: refs.force_torque.radius_at_time(obs.t_s).unwrap_or(nan),
+        laid_fraction_ref: f_ref,
+        theta_rad: refs
+            .theta_per_fraction
+            .map_or(nan, |k| k * obs.laid_fraction),
+        theta_ref_rad: refs.theta_per_fraction.map_or(nan, |k| k * f_ref),
+        n_tot_n: nan,
+        f_tot_n: nan,
+        n_tot_ref_n: forces.map_or(nan, |f| f.0),
+        f_tot_ref_n: forces.map_or(nan, |f| f.1),
         active_bodies: obs.active_bodies,
         max_joint_gap_m: obs.max_joint_gap_m,
         max_penetration_m: obs.max_penetration_m,

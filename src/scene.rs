@@ -63,6 +63,8 @@ const MAX_G_M_S2: f64 = 1000.0;
 const MAX_CONTACT_SPEED_M_S: f64 = 1000.0;
 /// Upper bound of `solver.max_dt_s` (s).
 const MAX_MAX_DT_S: f64 = 0.1;
+/// Bound of `floor.slope_deg` (degrees, either sign).
+const MAX_SLOPE_DEG: f64 = 45.0;
 
 /// Why a scene could not be loaded.
 #[derive(Debug, thiserror::Error)]
@@ -170,6 +172,16 @@ pub struct Scene {
     pub links_per_turn: u32,
     /// Coulomb friction coefficient between tape and floor, dimensionless (default: 1.0).
     pub friction: f64,
+    /// Slope of the floor, degrees, positive when the rolling direction (+x) is downhill
+    /// (default: 0.0). The floor stays the plane `y = 0` of the simulation frame and gravity
+    /// is tilted instead: `g = g (sin alpha, -cos alpha)`.
+    pub slope_deg: f64,
+    /// Whether the tape sticks to the floor where it touches it (sec. 2.1 remark for g = 0):
+    /// the coil is then held at its contact line, pulled as well as pushed (default: false).
+    pub sticky: bool,
+    /// Whether the coil turns about a fixed horizontal axis through the spiral's centre,
+    /// the tape hanging from it (App. E), instead of rolling on the floor (default: false).
+    pub fixed_axis: bool,
     /// Gravitational acceleration, m/s² (default: 9.81).
     pub g_m_s2: f64,
     /// Initial speed of the contact line, m/s (default: 0.0, which is rejected: a scene
@@ -211,6 +223,8 @@ struct SceneFile {
     #[serde(default)]
     stop: StopFile,
     #[serde(default)]
+    axis: AxisFile,
+    #[serde(default)]
     output: OutputFile,
 }
 
@@ -242,12 +256,16 @@ impl Default for DiscretisationFile {
 #[serde(deny_unknown_fields, default)]
 struct FloorFile {
     friction: f64,
+    slope_deg: f64,
+    sticky: bool,
 }
 
 impl Default for FloorFile {
     fn default() -> Self {
         Self {
             friction: DEFAULT_FRICTION,
+            slope_deg: 0.0,
+            sticky: false,
         }
     }
 }
@@ -329,6 +347,12 @@ impl Default for StopFile {
             settle_time_s: DEFAULT_SETTLE_TIME_S,
         }
     }
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct AxisFile {
+    fixed: bool,
 }
 
 #[derive(Debug, Deserialize)]
@@ -527,6 +551,13 @@ impl Scene {
             file.floor.friction >= 0.0,
             "must be >= 0",
         )?;
+        let slope = file.floor.slope_deg;
+        let slope_deg = check(
+            "floor.slope_deg",
+            slope,
+            slope.abs() < MAX_SLOPE_DEG,
+            format!("must be > -{MAX_SLOPE_DEG} and < {MAX_SLOPE_DEG}"),
+        )?;
         let g = file.gravity.g_m_s2;
         let g = check(
             "gravity.g_m_s2",
@@ -642,6 +673,9 @@ impl Scene {
             tape,
             links_per_turn,
             friction,
+            slope_deg,
+            sticky: file.floor.sticky,
+            fixed_axis: file.axis.fixed,
             g_m_s2: g,
             push_speed_m_s: push,
             solver,
@@ -790,6 +824,23 @@ contact_speed_m_s = 0.3
     }
 
     #[test]
+    fn variant_keys_default_off_and_the_variant_scenes_set_them() {
+        let s = Scene::from_toml_str(MINIMAL, "t").unwrap();
+        assert_relative_eq!(s.slope_deg, 0.0);
+        assert!(!s.sticky && !s.fixed_axis);
+        assert_relative_eq!(shipped("slope-down").slope_deg, 5.0);
+        assert_relative_eq!(shipped("slope-up").slope_deg, -2.0);
+        assert!(shipped("zero-g").sticky);
+        assert!(shipped("vertical").fixed_axis);
+        for name in ["single-turn", "spool", "frictionless-spool"] {
+            assert!(shipped(name).tape.core_radius_m > 0.0, "{name}");
+        }
+        for name in ["frictionless-spool", "frictionless-coil"] {
+            assert_relative_eq!(shipped(name).friction, 0.0);
+        }
+    }
+
+    #[test]
     fn defaults_applied() {
         let s = Scene::from_toml_str(MINIMAL, "fallback").unwrap();
         assert_eq!(s.name, "fallback");
@@ -919,6 +970,8 @@ contact_speed_m_s = 0.3
             ("discretisation", "links_per_turn", "4097"),
             ("discretisation", "links_per_turn", "5"),
             ("floor", "friction", "-0.1"),
+            ("floor", "slope_deg", "45.0"),
+            ("floor", "slope_deg", "-45.0"),
             ("gravity", "g_m_s2", "-9.81"),
             ("gravity", "g_m_s2", "1000.1"),
             ("push", "contact_speed_m_s", "-0.3"),
@@ -957,6 +1010,8 @@ contact_speed_m_s = 0.3
             ("tape", "core_radius_m", "0.0499"),
             ("discretisation", "links_per_turn", "4096"),
             ("floor", "friction", "0.0"),
+            ("floor", "slope_deg", "44.9"),
+            ("floor", "slope_deg", "-44.9"),
             ("gravity", "g_m_s2", "0.0"),
             ("gravity", "g_m_s2", "1000.0"),
             ("push", "contact_speed_m_s", "1000.0"),

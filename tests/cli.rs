@@ -123,6 +123,11 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
         &["floor.friction = -0.5: must be >= 0"],
     ),
     (
+        "slope of 45 degrees",
+        Edit::Append("[floor]\nslope_deg = 45.0"),
+        &["floor.slope_deg = 45: must be > -45 and < 45"],
+    ),
+    (
         "zero solver iterations",
         Edit::Append("[solver]\niterations = 0"),
         &["solver.iterations = 0: must be >= 1 and <= 1000"],

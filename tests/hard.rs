@@ -79,10 +79,9 @@ fn a_torn_chain_is_stopped_by_a_guard_with_everything_logged() {
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["status"], "stopped");
     assert!(
-        report["stop_reason"]
-            .as_str()
-            .unwrap()
-            .contains("above the bound 5.0000e-3 m (1 b)"),
+        report["stop_reason"].as_str().unwrap().contains(
+            "above the bound 5.0000e-3 m (the larger of 1 b and 1 % of the outermost link)"
+        ),
         "{}",
         report["stop_reason"]
     );

@@ -4,3 +4,4 @@ mod cli;
 mod fuzz;
 mod hard;
 mod sim;
+mod variants;
