@@ -6,9 +6,13 @@
 //! [`reference`](mod@reference) (pure `f64`) -> [`run`] (loop, samples, report) -> [`output`] (files and
 //! the summary).
 
+pub mod analysis;
 pub mod model;
 pub mod output;
+pub mod overrides;
+pub mod plot;
 pub mod reference;
 pub mod run;
 pub mod scene;
 pub mod spiral;
+pub mod sweep;
