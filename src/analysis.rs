@@ -142,8 +142,15 @@ pub struct Study {
     pub links: Vec<f64>,
     /// Wall time per step of the rows (s).
     pub wall_per_step_s: Vec<f64>,
+    /// Self-convergence: the largest relative difference of the milestone times from
+    /// those of the study's finest run (`NaN` for the finest run itself).
+    pub self_err: Vec<f64>,
     /// Error against step size.
     pub err_fit: Option<PowerFit>,
+    /// Self-convergence against step size (the finest run excluded). It measures the
+    /// order of a key whose own error hides under another's (e.g. the time step under
+    /// the resolution error), and is biased high near the finest run.
+    pub self_fit: Option<PowerFit>,
     /// Energy lost before the bang against step size.
     pub lost_fit: Option<PowerFit>,
     /// Wall time per step against links (the per-step cost slope).
@@ -219,6 +226,13 @@ impl SweepAnalysis {
             })
             .collect();
         let front = pareto_front(&cost, &err);
+        // Milestone errors against the exact model: t_sim = t_geo (1 + e).
+        let milestone_errs: Vec<Vec<f64>> = table
+            .header
+            .iter()
+            .filter(|h| h.starts_with("err_geo_"))
+            .filter_map(|h| table.numbers(h))
+            .collect();
 
         let mut studies = Vec::new();
         for key in &keys {
@@ -257,10 +271,25 @@ impl SweepAnalysis {
                 let l = pick(&lost);
                 let n = pick(&links);
                 let wps: Vec<f64> = rows.iter().map(|&r| wall[r] / steps[r]).collect();
+                let finest = *rows.last().expect("at least two rows");
+                let self_err: Vec<f64> = rows
+                    .iter()
+                    .map(|&r| {
+                        if r == finest {
+                            return f64::NAN;
+                        }
+                        milestone_errs
+                            .iter()
+                            .map(|m| ((1.0 + m[r]) / (1.0 + m[finest]) - 1.0).abs())
+                            .fold(0.0_f64, |a, d| if d.is_nan() { f64::NAN } else { a.max(d) })
+                    })
+                    .collect();
                 studies.push(Study {
                     key: key.clone(),
                     group,
                     err_fit: fit_power(&h, &e),
+                    self_fit: fit_power(&h, &self_err),
+                    self_err,
                     lost_fit: fit_power(&h, &l),
                     cost_fit: fit_power(&n, &wps),
                     rows,
@@ -309,13 +338,16 @@ impl SweepAnalysis {
                 o,
                 "Least-squares fit of log10 y = p log10 h + c over the runs of one varied key, \
                  the others held; h is the step the key stands for (the value for a key in s or \
-                 m, else 1/value). p = order, R² of the log-log line, n runs.\n"
+                 m, else 1/value). p = order, R² of the log-log line, n runs. Error: against the \
+                 reference above; self-convergence: the largest relative change of a milestone \
+                 time from the finest run of the same line (biased high next to it); energy \
+                 loss: lost before the bang over E0 (the exact model loses nothing).\n"
             );
             let _ = writeln!(
                 o,
-                "| key | others | h range | error order p (R², n) | energy-loss order p (R², n) | per-step cost slope vs links (R², n) |"
+                "| key | others | h range | error order p (R², n) | self-convergence order p (R², n) | energy-loss order p (R², n) | per-step cost slope vs links (R², n) |"
             );
-            let _ = writeln!(o, "|---|---|---|---|---|---|");
+            let _ = writeln!(o, "|---|---|---|---|---|---|---|");
             let fit = |f: &Option<PowerFit>| {
                 f.map_or_else(
                     || "-".to_owned(),
@@ -328,12 +360,13 @@ impl SweepAnalysis {
                         .fold((f64::INFINITY, 0.0_f64), |(a, b), &h| (a.min(h), b.max(h)));
                 let _ = writeln!(
                     o,
-                    "| `{}` | {} | {:.3e} .. {:.3e} | {} | {} | {} |",
+                    "| `{}` | {} | {:.3e} .. {:.3e} | {} | {} | {} | {} |",
                     s.key,
                     if s.group.is_empty() { "-" } else { &s.group },
                     lo,
                     hi,
                     fit(&s.err_fit),
+                    fit(&s.self_fit),
                     fit(&s.lost_fit),
                     fit(&s.cost_fit)
                 );
@@ -524,11 +557,44 @@ mod tests {
         assert_relative_eq!(s.cost_fit.unwrap().order, 0.0, epsilon = 1e-9);
         // Equal cost: only the most accurate run is on the front.
         assert_eq!(a.front, vec![2]);
+        // Self-convergence: no err_geo_* columns in this table, so nothing to fit.
+        assert!(s.self_fit.is_none());
         let md = a.markdown("t");
         assert!(
             md.contains("| `discretisation.links_per_turn` | - |"),
             "{md}"
         );
         assert!(md.contains("| 1.00 (1.000, 3) |"), "{md}");
+    }
+
+    #[test]
+    fn self_convergence_is_measured_from_the_finest_run() {
+        // Milestone times t = t_geo (1 + e): the finest run (n = 64) is off by -0.4% (say,
+        // a resolution error), the others differ from it by 0.2 h^2 with h = 1/n.
+        let mut t = table(&[
+            ("8", 1.0, 0.1, 0.01),
+            ("16", 1.0, 0.1, 0.01),
+            ("32", 1.0, 0.1, 0.01),
+            ("64", 1.0, 0.1, 0.01),
+        ]);
+        let e_fine = -0.004;
+        t.header.insert(3, "err_geo_a".into());
+        t.header.insert(4, "err_geo_b".into());
+        for (row, n) in t.rows.iter_mut().zip([8.0_f64, 16.0, 32.0, 64.0]) {
+            let d = if n > 60.0 { 0.0 } else { 0.2 / (n * n) };
+            let e = (1.0 + e_fine) * (1.0 + d) - 1.0;
+            // Milestone b differs by half as much: the largest difference counts.
+            let eb = (1.0 + e_fine) * (1.0 + 0.5 * d) - 1.0;
+            row.insert(3, e.to_string());
+            row.insert(4, eb.to_string());
+        }
+        let a = SweepAnalysis::new(t, Reference::Exact, "wall_s").unwrap();
+        let s = &a.studies[0];
+        assert_eq!(s.key, "discretisation.links_per_turn");
+        assert!(s.self_err[3].is_nan(), "the finest run has no self error");
+        assert_relative_eq!(s.self_err[0], 0.2 / 64.0, max_relative = 1e-9);
+        let f = s.self_fit.unwrap();
+        assert_eq!(f.n, 3);
+        assert_relative_eq!(f.order, 2.0, epsilon = 1e-6);
     }
 }

@@ -77,6 +77,7 @@ fn line_chart(
     x_desc: &str,
     y_desc: &str,
     curves: &[Curve<'_>],
+    legend_at: SeriesLabelPosition,
     extra: impl FnOnce(&mut LinChart<'_, '_>) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
     let (x0, x1) = range(curves.iter().flat_map(|c| c.points.iter().map(|p| p.0)));
@@ -115,7 +116,7 @@ fn line_chart(
         .configure_series_labels()
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperLeft)
+        .position(legend_at)
         .label_font((FONT, 14))
         .draw()
         .map_err(err)?;
@@ -195,6 +196,7 @@ pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
                     dashed: true,
                 },
             ],
+            SeriesLabelPosition::UpperLeft,
             |_| Ok(()),
         )?;
         let v = [cut("xdot_m_s")?, cut("xdot_geo_m_s")?, cut("xdot_ref_m_s")?];
@@ -223,6 +225,7 @@ pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
                     dashed: true,
                 },
             ],
+            SeriesLabelPosition::UpperLeft,
             |_| Ok(()),
         )?;
         root.present().map_err(err)?;
@@ -283,18 +286,23 @@ pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
                     dashed: true,
                 },
             ],
+            SeriesLabelPosition::MiddleLeft,
             |chart| {
                 if let Some(b) = bang_t {
                     let (y0, y1) = range(k.iter().chain(&p).chain(&d).copied().chain([e0, mgr]));
+                    let c = RGBColor(148, 103, 189);
                     chart
                         .draw_series(DashedLineSeries::new(
                             [(b, y0), (b, y1)],
                             4,
                             4,
-                            RGBColor(148, 103, 189).stroke_width(1),
+                            c.stroke_width(1),
                         ))
                         .map_err(err)?
-                        .label("final bang begins");
+                        .label("final bang begins")
+                        .legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1))
+                        });
                 }
                 Ok(())
             },
@@ -482,7 +490,12 @@ pub fn plot_sweep(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<
                 &h_desc,
                 if which == 0 { "error" } else { "lost / E0" },
                 studies.iter().flat_map(|s| s.h.iter().copied()),
-                ys.iter().flat_map(|y| y.iter().copied()),
+                ys.iter().flat_map(|y| y.iter().copied()).chain(
+                    studies
+                        .iter()
+                        .filter(|_| which == 0)
+                        .flat_map(|s| s.self_err.iter().copied()),
+                ),
             )?;
             for (si, (s, (y, fit))) in studies.iter().zip(ys.iter().zip(&fits)).enumerate() {
                 let c = color(si);
@@ -508,6 +521,29 @@ pub fn plot_sweep(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<
                         format!("{group}fit: order {:.2} (R² {:.3})", f.order, f.r2),
                         c,
                     )?;
+                }
+                if which == 0 {
+                    let pts: Vec<(f64, f64)> = pairs(&s.h, &s.self_err)
+                        .into_iter()
+                        .filter(|p| p.0 > 0.0 && p.1 > 0.0)
+                        .collect();
+                    chart
+                        .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.stroke_width(1))))
+                        .map_err(err)?
+                        .label(format!("{group}change from the finest run"))
+                        .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.stroke_width(1)));
+                    if let Some(f) = &s.self_fit {
+                        fit_line(
+                            &mut chart,
+                            f,
+                            &s.h,
+                            format!(
+                                "{group}self-convergence: order {:.2} (R² {:.3})",
+                                f.order, f.r2
+                            ),
+                            c,
+                        )?;
+                    }
                 }
             }
             legend(&mut chart, SeriesLabelPosition::LowerRight)?;
