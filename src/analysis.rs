@@ -15,6 +15,8 @@ pub struct PowerFit {
     pub order: f64,
     /// The intercept, `log10` of the constant.
     pub log10_c: f64,
+    /// Standard error of `order` (`NaN` with 2 points).
+    pub order_se: f64,
     /// Coefficient of determination of the log-log line (1 = a perfect power law).
     pub r2: f64,
     /// Points used.
@@ -48,7 +50,8 @@ pub fn fit_power(x: &[f64], y: &[f64]) -> Option<PowerFit> {
     let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
     let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
     let syy: f64 = pts.iter().map(|p| (p.1 - my).powi(2)).sum();
-    if sxx <= 1e-300 {
+    // All x equal (to rounding): no slope to fit.
+    if sxx <= 1e-12 * nf {
         return None;
     }
     let order = sxy / sxx;
@@ -58,8 +61,14 @@ pub fn fit_power(x: &[f64], y: &[f64]) -> Option<PowerFit> {
         .map(|p| (p.1 - (log10_c + order * p.0)).powi(2))
         .sum();
     let r2 = if syy > 0.0 { 1.0 - ss_res / syy } else { 1.0 };
+    let order_se = if n > 2 {
+        (ss_res / (nf - 2.0) / sxx).sqrt()
+    } else {
+        f64::NAN
+    };
     Some(PowerFit {
         order,
+        order_se,
         log10_c,
         r2,
         n,
@@ -186,7 +195,14 @@ pub const SERIES_KEYS: [&str; 2] = ["contact.model", "solver.iterations"];
 
 impl SweepAnalysis {
     /// Analyses `table` with errors against `reference` and cost from `cost_column`.
-    pub fn new(table: SweepTable, reference: Reference, cost_column: &str) -> anyhow::Result<Self> {
+    /// Varied keys in `repeats` name repetitions (e.g. `name=rep1,rep2,...`): runs that
+    /// differ only in them are fitted together, so a fit pools the repetitions.
+    pub fn new(
+        table: SweepTable,
+        reference: Reference,
+        cost_column: &str,
+        repeats: &[String],
+    ) -> anyhow::Result<Self> {
         let col = |name: &str| {
             table
                 .numbers(name)
@@ -235,7 +251,7 @@ impl SweepAnalysis {
             .collect();
 
         let mut studies = Vec::new();
-        for key in &keys {
+        for key in keys.iter().filter(|k| !repeats.contains(k)) {
             let vals: Vec<f64> = table
                 .numbers(key)
                 .expect("a varied key is a column")
@@ -248,7 +264,7 @@ impl SweepAnalysis {
             for r in (0..table.rows.len()).filter(|&r| ok[r]) {
                 let g = keys
                     .iter()
-                    .filter(|k| *k != key)
+                    .filter(|k| *k != key && !repeats.contains(k))
                     .map(|k| format!("{k}={}", cell(r, k)))
                     .collect::<Vec<_>>()
                     .join(" ");
@@ -338,7 +354,7 @@ impl SweepAnalysis {
                 o,
                 "Least-squares fit of log10 y = p log10 h + c over the runs of one varied key, \
                  the others held; h is the step the key stands for (the value for a key in s or \
-                 m, else 1/value). p = order, R² of the log-log line, n runs. Error: against the \
+                 m, else 1/value). p = order ± its standard error, R² of the log-log line, n runs. Error: against the \
                  reference above; self-convergence: the largest relative change of a milestone \
                  time from the finest run of the same line (biased high next to it); energy \
                  loss: lost before the bang over E0 (the exact model loses nothing).\n"
@@ -351,7 +367,14 @@ impl SweepAnalysis {
             let fit = |f: &Option<PowerFit>| {
                 f.map_or_else(
                     || "-".to_owned(),
-                    |f| format!("{:.2} ({:.3}, {})", f.order, f.r2, f.n),
+                    |f| {
+                        let se = if f.order_se.is_finite() {
+                            format!(" ± {:.2}", f.order_se)
+                        } else {
+                            String::new()
+                        };
+                        format!("{:.2}{se} ({:.3}, {})", f.order, f.r2, f.n)
+                    },
                 )
             };
             for s in &self.studies {
@@ -393,12 +416,12 @@ impl SweepAnalysis {
         let _ = writeln!(o, "## All runs\n");
         let _ = writeln!(
             o,
-            "| # | {} | links | steps | wall to bang s | wall s | err vs exact | err vs eq. 7 | lost before bang (of E0) | status |",
+            "| # | {} | links | steps | wall to bang s | wall s | wall s per sim s | err vs exact | err vs eq. 7 | lost before bang (of E0) | status |",
             keys.join(" | ")
         );
         let _ = writeln!(
             o,
-            "|---|{}---|---|---|---|---|---|---|---|",
+            "|---|{}---|---|---|---|---|---|---|---|---|",
             "---|".repeat(keys.len())
         );
         let get = |name: &str| {
@@ -409,6 +432,7 @@ impl SweepAnalysis {
         let steps = get("steps");
         let wr = get("wall_rolling_s");
         let w = get("wall_s");
+        let sim = get("sim_time_s");
         let eg = get("max_err_geo");
         let e7 = get("max_err_eq7");
         let lost = get("lost_before_bang_of_e0");
@@ -424,7 +448,7 @@ impl SweepAnalysis {
         for r in 0..t.rows.len() {
             let _ = writeln!(
                 o,
-                "| {}{} | {} | {} | {} | {:.4} | {:.4} | {} | {} | {} | {} |",
+                "| {}{} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {} | {} | {} | {} |",
                 t.rows[r][ic],
                 if self.front.contains(&r) { " *" } else { "" },
                 settings_cells(t, &keys, r),
@@ -432,6 +456,7 @@ impl SweepAnalysis {
                 steps[r],
                 wr[r],
                 w[r],
+                w[r] / sim[r],
                 pc(eg[r]),
                 pc(e7[r]),
                 pc(lost[r]),
@@ -477,6 +502,11 @@ mod tests {
             f.order
         );
         assert!(f.r2 < 1.0 && f.r2 > 0.99, "R² {}", f.r2);
+        assert!(
+            f.order_se > 0.0 && f.order_se < 0.1,
+            "standard error {}",
+            f.order_se
+        );
     }
 
     #[test]
@@ -487,6 +517,8 @@ mod tests {
         assert_eq!(f.n, 3);
         assert_relative_eq!(f.order, 2.0, epsilon = 1e-9);
         assert!(fit_power(&[0.1, 0.1], &[1.0, 2.0]).is_none());
+        // Equal up to rounding (704 links computed two ways) is still equal.
+        assert!(fit_power(&[704.0, 704.0 * (1.0 + 1e-15), 704.0], &[1.0, 2.0, 3.0]).is_none());
         assert!(fit_power(&[0.1], &[1.0]).is_none());
     }
 
@@ -549,7 +581,7 @@ mod tests {
             ("16", 200.0, 0.1, 0.6 / 16.0),
             ("32", 400.0, 0.1, 0.6 / 32.0),
         ]);
-        let a = SweepAnalysis::new(t, Reference::Exact, "wall_rolling_s").unwrap();
+        let a = SweepAnalysis::new(t, Reference::Exact, "wall_rolling_s", &[]).unwrap();
         assert_eq!(a.studies.len(), 1);
         let s = &a.studies[0];
         assert_relative_eq!(s.err_fit.unwrap().order, 1.0, epsilon = 1e-9);
@@ -564,7 +596,7 @@ mod tests {
             md.contains("| `discretisation.links_per_turn` | - |"),
             "{md}"
         );
-        assert!(md.contains("| 1.00 (1.000, 3) |"), "{md}");
+        assert!(md.contains("| 1.00 ± 0.00 (1.000, 3) |"), "{md}");
     }
 
     #[test]
@@ -588,7 +620,7 @@ mod tests {
             row.insert(3, e.to_string());
             row.insert(4, eb.to_string());
         }
-        let a = SweepAnalysis::new(t, Reference::Exact, "wall_s").unwrap();
+        let a = SweepAnalysis::new(t, Reference::Exact, "wall_s", &[]).unwrap();
         let s = &a.studies[0];
         assert_eq!(s.key, "discretisation.links_per_turn");
         assert!(s.self_err[3].is_nan(), "the finest run has no self error");

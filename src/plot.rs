@@ -333,6 +333,8 @@ fn log_chart<'a, 'b>(
         .configure_mesh()
         .x_desc(x_desc)
         .y_desc(y_desc)
+        .x_labels(8)
+        .y_labels(10)
         .x_label_formatter(&|v| format!("{v:.2e}"))
         .y_label_formatter(&|v| format!("{v:.1e}"))
         .light_line_style(WHITE.mix(0.0))
@@ -367,6 +369,15 @@ fn color(i: usize) -> RGBColor {
         RGBColor(23, 190, 207),
     ];
     C[i % C.len()]
+}
+
+/// `p ± se` of a fit.
+fn order(f: &PowerFit) -> String {
+    if f.order_se.is_finite() {
+        format!("{:.2} ± {:.2}", f.order, f.order_se)
+    } else {
+        format!("{:.2}", f.order)
+    }
 }
 
 /// Draws a fitted power law over `[h0, h1]` and names its order in the legend.
@@ -503,7 +514,7 @@ pub fn plot_sweep(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<
                     .into_iter()
                     .filter(|p| p.0 > 0.0 && p.1 > 0.0)
                     .collect();
-                let group = if s.group.is_empty() {
+                let group = if s.group.is_empty() || studies.len() == 1 {
                     String::new()
                 } else {
                     format!("{}: ", s.group)
@@ -518,7 +529,7 @@ pub fn plot_sweep(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<
                         &mut chart,
                         f,
                         &s.h,
-                        format!("{group}fit: order {:.2} (R² {:.3})", f.order, f.r2),
+                        format!("{group}fit: order {} (R² {:.3})", order(f), f.r2),
                         c,
                     )?;
                 }
@@ -538,8 +549,9 @@ pub fn plot_sweep(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<
                             f,
                             &s.h,
                             format!(
-                                "{group}self-convergence: order {:.2} (R² {:.3})",
-                                f.order, f.r2
+                                "{group}self-convergence: order {} (R² {:.3})",
+                                order(f),
+                                f.r2
                             ),
                             c,
                         )?;
@@ -564,7 +576,7 @@ pub fn plot_sweep(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<
             chart
                 .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))
                 .map_err(err)?
-                .label(if s.group.is_empty() {
+                .label(if s.group.is_empty() || studies.len() == 1 {
                     "runs".to_owned()
                 } else {
                     s.group.clone()
@@ -575,12 +587,12 @@ pub fn plot_sweep(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<
                     &mut chart,
                     f,
                     &s.links,
-                    format!("slope {:.3} (R² {:.3})", f.order, f.r2),
+                    format!("slope {} (R² {:.3})", order(f), f.r2),
                     c,
                 )?;
             }
         }
-        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
         root.present().map_err(err)?;
         written.push(path.clone());
     }

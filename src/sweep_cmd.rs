@@ -75,6 +75,16 @@ pub struct ReportArgs {
     /// Title of the report and plots (default: the name of the sweep's folder).
     #[arg(long)]
     title: Option<String>,
+    /// Fit convergence only in these varied keys (repeatable; default: every numeric one).
+    #[arg(long, value_name = "KEY", conflicts_with = "no_convergence")]
+    converge: Vec<String>,
+    /// A varied key whose values are repetitions (e.g. `--vary name=rep1,rep2,rep3`): runs
+    /// that differ only in it are fitted together (repeatable).
+    #[arg(long, value_name = "KEY")]
+    repeat_key: Vec<String>,
+    /// No convergence fits or plots: the Pareto plot and the table only.
+    #[arg(long)]
+    no_convergence: bool,
 }
 
 fn folder_of(p: &Path) -> PathBuf {
@@ -196,7 +206,20 @@ fn write_report(args: &ReportArgs) -> anyhow::Result<String> {
             .and_then(|d| d.file_name().map(|n| n.to_string_lossy().into_owned()))
             .unwrap_or_else(|| "sweep".into())
     });
-    let analysis = SweepAnalysis::new(table, reference, cost)?;
+    let mut analysis = SweepAnalysis::new(table, reference, cost, &args.repeat_key)?;
+    if args.no_convergence {
+        analysis.studies.clear();
+    } else if !args.converge.is_empty() {
+        let varied = analysis.table.varied_keys();
+        for k in &args.converge {
+            anyhow::ensure!(
+                varied.contains(k),
+                "--converge {k}: not a varied key of this sweep (varied: {})",
+                varied.join(", ")
+            );
+        }
+        analysis.studies.retain(|s| args.converge.contains(&s.key));
+    }
     let files = uncoil::plot::plot_sweep(&analysis, &dir, &title)?;
     let mut md = analysis.markdown(&title);
     md.push_str("\nPlots: ");
