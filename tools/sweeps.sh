@@ -9,6 +9,7 @@
 #   yoga-links    yoga mat: convergence in the resolution (links per turn)
 #   yoga-dt       yoga mat: convergence in the largest time step (max_dt_s, 1 step per link)
 #   yoga-rule     yoga mat: convergence in the adaptive step rule (steps per link)
+#   yoga-iter     yoga mat: convergence in the solver iterations
 #   thin-pareto   thin tape: resolution x time step, against eq. (7)
 #   scaling       both scenes: wall time per step and per simulated second against links
 #   yoga-run      the yoga mat's run plots (motion.svg, energy.svg) into docs/yoga-mat/
@@ -62,6 +63,11 @@ run_study() {
       --vary solver.iterations=8 \
       --vary solver.steps_per_link=1,2,4,8,16 "${nobang[@]}" \
       -- --title "yoga mat, adaptive step rule" ;;
+  yoga-iter)
+    study yoga-iter $yoga \
+      --vary discretisation.links_per_turn=128 --vary solver.steps_per_link=8 \
+      --vary solver.iterations=2,4,8,16,32 "${nobang[@]}" \
+      -- --title "yoga mat, solver iterations" ;;
   thin-pareto)
     study thin-pareto $thin \
       --vary discretisation.links_per_turn=12,16,24,32,48 \
@@ -95,5 +101,5 @@ run_study() {
   esac
 }
 
-all=(yoga-pareto yoga-links yoga-dt yoga-rule thin-pareto scaling yoga-run)
+all=(yoga-pareto yoga-links yoga-dt yoga-rule yoga-iter thin-pareto scaling yoga-run)
 for s in "${@:-${all[@]}}"; do run_study "$s"; done
