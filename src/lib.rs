@@ -4,7 +4,9 @@
 //!
 //! The pipeline: [`scene`] (TOML -> validated `Scene`) -> [`model`] (rapier) and
 //! [`reference`](mod@reference) (pure `f64`) -> [`run`] (loop, samples, report) -> [`output`] (files and
-//! the summary).
+//! the summary). Around it: [`overrides`] (scene keys set from the command line),
+//! [`sweep`] (grids of runs, one CSV row each), [`analysis`] (Pareto front, convergence
+//! orders) and [`plot`] (SVG pictures of a run or a sweep).
 
 pub mod analysis;
 pub mod model;

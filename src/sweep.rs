@@ -2,7 +2,7 @@
 //! parallel (rayon), one row per finished run appended and flushed to `sweep.csv`, shards
 //! (`K/N`) for batch schedulers and the merge of shard files. It does no physics and draws
 //! nothing: each run is [`run`] on a scene built by
-//! [`scene_with_overrides`](crate::overrides::scene_with_overrides); reports are in
+//! [`scene_with_overrides`]; reports are in
 //! [`analysis`](crate::analysis) and [`plot`](crate::plot).
 
 use std::collections::BTreeMap;
