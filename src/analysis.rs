@@ -187,6 +187,8 @@ pub struct SweepAnalysis {
     pub front: Vec<usize>,
     /// One study per numeric varied key and setting of the others.
     pub studies: Vec<Study>,
+    /// A target to report against: (largest error, largest cost in s).
+    pub target: Option<(f64, f64)>,
 }
 
 /// Keys that name a series in the Pareto plot when they are varied: the contact model
@@ -327,7 +329,21 @@ impl SweepAnalysis {
             series_keys,
             front,
             studies,
+            target: None,
         })
+    }
+
+    /// The runs that meet the target (error and cost at most the target's), cheapest
+    /// first; empty without a target.
+    pub fn meeting_target(&self) -> Vec<usize> {
+        let Some((e, c)) = self.target else {
+            return Vec::new();
+        };
+        let mut v: Vec<usize> = (0..self.cost.len())
+            .filter(|&i| self.err[i] <= e && self.cost[i] <= c)
+            .collect();
+        v.sort_by(|&a, &b| self.cost[a].total_cmp(&self.cost[b]));
+        v
     }
 
     /// The Markdown report: the fits, the Pareto front and every run.
@@ -412,6 +428,36 @@ impl SweepAnalysis {
                 );
             }
             let _ = writeln!(o);
+        }
+        if let Some((e, c)) = self.target {
+            let ok = self.meeting_target();
+            let _ = write!(
+                o,
+                "Target: error <= {:.3}% in <= {c} s: met by {} of {} runs",
+                100.0 * e,
+                ok.len(),
+                t.rows.len()
+            );
+            match ok.first() {
+                Some(&r) => {
+                    let _ = writeln!(
+                        o,
+                        "; the cheapest: {} ({:.4} s, {:.3}%).\n",
+                        keys.iter()
+                            .map(|k| format!(
+                                "{k}={}",
+                                t.rows[r][t.column(k).expect("a varied key")]
+                            ))
+                            .collect::<Vec<_>>()
+                            .join(" "),
+                        self.cost[r],
+                        100.0 * self.err[r]
+                    );
+                }
+                None => {
+                    let _ = writeln!(o, ".\n");
+                }
+            }
         }
         let _ = writeln!(o, "## All runs\n");
         let _ = writeln!(
@@ -597,6 +643,19 @@ mod tests {
             "{md}"
         );
         assert!(md.contains("| 1.00 ± 0.00 (1.000, 3) |"), "{md}");
+        let mut a = a;
+        a.target = Some((0.05, 0.2));
+        assert_eq!(a.meeting_target(), vec![1, 2]);
+        assert!(
+            a.markdown("t").contains(
+                "Target: error <= 5.000% in <= 0.2 s: met by 2 of 3 runs; the cheapest: \
+                 discretisation.links_per_turn=16 (0.1000 s, 3.750%)."
+            ),
+            "{}",
+            a.markdown("t")
+        );
+        a.target = Some((0.001, 0.2));
+        assert!(a.meeting_target().is_empty());
     }
 
     #[test]

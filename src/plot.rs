@@ -430,8 +430,8 @@ pub fn plot_sweep(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<
             &format!("{title}: error against wall time"),
             &format!("wall time, {} (s)", a.cost_column),
             &format!("max |time error| vs {}", a.reference.label()),
-            idx.iter().map(|&i| a.cost[i]),
-            idx.iter().map(|&i| a.err[i]),
+            idx.iter().map(|&i| a.cost[i]).chain(a.target.map(|t| t.1)),
+            idx.iter().map(|&i| a.err[i]).chain(a.target.map(|t| t.0)),
         )?;
         let mut names: Vec<&String> = idx.iter().map(|&i| &a.series[i]).collect();
         names.sort();
@@ -465,6 +465,21 @@ pub fn plot_sweep(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<
             .map_err(err)?
             .label("Pareto front")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+        if let Some((e, c)) = a.target {
+            let (x0, _) = log_range(idx.iter().map(|&i| a.cost[i]).chain([c]));
+            let (y0, _) = log_range(idx.iter().map(|&i| a.err[i]).chain([e]));
+            let grey = RGBColor(127, 127, 127);
+            chart
+                .draw_series(DashedLineSeries::new(
+                    [(x0, e), (c, e), (c, y0)],
+                    6,
+                    4,
+                    grey.stroke_width(2),
+                ))
+                .map_err(err)?
+                .label(format!("target: <= {:.2}% in <= {c} s", 100.0 * e))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey));
+        }
         legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         root.present().map_err(err)?;
     }

@@ -78,6 +78,10 @@ pub struct ReportArgs {
     /// Fit convergence only in these varied keys (repeatable; default: every numeric one).
     #[arg(long, value_name = "KEY", conflicts_with = "no_convergence")]
     converge: Vec<String>,
+    /// A target to mark and report: the largest error (a fraction, e.g. 0.003) and the
+    /// largest wall time in s, e.g. `--target 0.003,0.3`.
+    #[arg(long, value_name = "ERROR,WALL_S", value_parser = parse_target)]
+    target: Option<(f64, f64)>,
     /// A varied key whose values are repetitions (e.g. `--vary name=rep1,rep2,rep3`): runs
     /// that differ only in it are fitted together (repeatable).
     #[arg(long, value_name = "KEY")]
@@ -85,6 +89,18 @@ pub struct ReportArgs {
     /// No convergence fits or plots: the Pareto plot and the table only.
     #[arg(long)]
     no_convergence: bool,
+}
+
+fn parse_target(s: &str) -> Result<(f64, f64), String> {
+    let bad = || format!("`{s}`: expected ERROR,WALL_S with both > 0, e.g. 0.003,0.3");
+    let (e, w) = s.split_once(',').ok_or_else(bad)?;
+    let e: f64 = e.trim().parse().map_err(|_| bad())?;
+    let w: f64 = w.trim().parse().map_err(|_| bad())?;
+    if e > 0.0 && w > 0.0 && e.is_finite() && w.is_finite() {
+        Ok((e, w))
+    } else {
+        Err(bad())
+    }
 }
 
 fn folder_of(p: &Path) -> PathBuf {
@@ -207,6 +223,7 @@ fn write_report(args: &ReportArgs) -> anyhow::Result<String> {
             .unwrap_or_else(|| "sweep".into())
     });
     let mut analysis = SweepAnalysis::new(table, reference, cost, &args.repeat_key)?;
+    analysis.target = args.target;
     if args.no_convergence {
         analysis.studies.clear();
     } else if !args.converge.is_empty() {

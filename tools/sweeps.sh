@@ -45,7 +45,7 @@ run_study() {
       --vary discretisation.links_per_turn=12,16,24,32,48,64,96 \
       --vary solver.steps_per_link=1,2,4,8 --vary solver.iterations=2,4,8 \
       --vary solver.max_dt_s=0.1 "${nobang[@]}" \
-      -- --title "yoga mat" --no-convergence ;;
+      -- --title "yoga mat" --no-convergence --target 0.003,0.3 ;;
   yoga-links)
     study yoga-links $yoga \
       --vary discretisation.links_per_turn=16,32,64,128,256 \
@@ -72,7 +72,8 @@ run_study() {
     study thin-pareto $thin \
       --vary discretisation.links_per_turn=12,16,24,32,48 \
       --vary solver.max_dt_s=0.002,0.001,0.0005 "${nobang[@]}" \
-      -- --title "thin tape" --reference eq7 --converge discretisation.links_per_turn
+      -- --title "thin tape" --reference eq7 --converge discretisation.links_per_turn \
+      --target 0.01,15
     # The same runs against the exact-geometry model, the reference the runs converge to.
     rm -f "$docs/thin-pareto/vs-exact"/*.svg
     "$bin" sweep-report "$docs/thin-pareto/sweep.csv" --out "$docs/thin-pareto/vs-exact" \
