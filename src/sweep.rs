@@ -725,6 +725,35 @@ mod tests {
         assert_eq!(max_abs([Some(0.1), None].into_iter()), None);
     }
 
+    fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    #[test]
+    fn merge_sorts_by_index_and_refuses_mismatches() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let a = write(d, "a.csv", "index,k,status\n2,x,ok\n0,y,\"failed: a, b\"\n");
+        let b = write(d, "b.csv", "index,k,status\n1,z,ok\n");
+        let m = merge(&[a.clone(), b.clone()]).unwrap();
+        let idx: Vec<&str> = m.rows.iter().map(|r| r[0].as_str()).collect();
+        assert_eq!(idx, ["0", "1", "2"]);
+        assert_eq!(m.rows[0][2], "failed: a, b");
+        let out = write_merged(&m, &d.join("out")).unwrap();
+        assert_eq!(SweepTable::read(&out).unwrap(), m);
+
+        let other = write(d, "c.csv", "index,j,status\n3,z,ok\n");
+        let e = merge(&[a.clone(), other]).unwrap_err().to_string();
+        assert!(e.contains("its columns differ"), "{e}");
+        let e = merge(&[a.clone(), b, a]).unwrap_err().to_string();
+        assert!(e.contains("combination 2 is in both"), "{e}");
+        let short = write(d, "d.csv", "index,k,status\n4,z\n");
+        let e = merge(&[short]).unwrap_err().to_string();
+        assert!(e.contains("line 2: 2 cells, the header has 3"), "{e}");
+    }
+
     #[test]
     fn a_bad_value_stops_the_sweep_before_it_runs() {
         let text = include_str!("../scenes/yoga-mat.toml");
