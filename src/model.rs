@@ -202,6 +202,9 @@ pub struct Model {
     steps_per_link: f64,
     max_dt: f64,
     freeze_speed: f64,
+    bang_step_rad: f64,
+    /// Softness of every joint (see `Solver::joint_hz`).
+    joint_softness: SpringCoefficients<Real>,
     friction: f64,
     g: f64,
     half_b: f64,
@@ -275,6 +278,15 @@ impl Model {
         // for the yoga mat): the end of an unroll is far faster than that, so lift the cap.
         ip.normalized_max_linear_velocity = Real::MAX;
         ip.dt = scene.solver.max_dt_s;
+        // The floor is a damped spring in rapier (60 Hz by default): the coil would sink
+        // g / (2 pi f)^2 into it, losing that potential energy in the spring's damper, and the
+        // load changes of every link would be damped too. See `Solver::contact_hz`.
+        let floor_soft = SpringCoefficients::new(
+            scene.solver.contact_hz,
+            ip.static_contact_softness.damping_ratio,
+        );
+        ip.static_contact_softness = floor_soft;
+        ip.contact_softness = floor_soft;
 
         let ground = world.insert_body(RigidBodyBuilder::fixed());
         let floor = world.insert_collider(
@@ -296,10 +308,15 @@ impl Model {
         let psi_low = spiral.psi_out;
         let coil_angle = spiral.rotation_with_bottom_at(psi_low);
         let p = rotate(spiral.point(psi_low), coil_angle);
-        let origin = [-p[0], 0.5 * b - p[1]];
+        // The contact circle is shrunk by the first link's chord ratio (see `refit_ball`), so
+        // the lowest node sits its inset below the floor plane, as every node does when it
+        // reaches the floor: start the coil there rather than dropping it onto the floor.
+        let first = links[0];
+        let origin = [-p[0], 0.5 * b - p[1] - first.inset_m];
         let mprops = coil_sums.mass_properties();
-        // Rolling about the peel point at the pushed contact-line speed: x' = omega rho_c.
-        let omega = -scene.push_speed_m_s / spiral.curvature_radius(psi_low);
+        // Rolling about the contact point at the pushed contact-line speed: x' = omega rho.
+        let contact_radius = spiral.curvature_radius(psi_low) * first.chord_ratio;
+        let omega = -scene.push_speed_m_s / contact_radius;
         let com_local = mprops.local_com;
         let com = rotate([com_local.x, com_local.y], coil_angle);
         let rel = [origin[0] + com[0], origin[1] + com[1] - 0.5 * b];
@@ -313,7 +330,7 @@ impl Model {
                 .can_sleep(false),
         );
         let coil_ball = world.insert_collider(
-            Self::ball_builder(&spiral, psi_low, scene.friction),
+            Self::ball_builder(&spiral, psi_low, first.chord_ratio, scene.friction),
             Some(coil),
         );
         // The engine computes mass properties lazily at the next step; energies are read
@@ -330,6 +347,11 @@ impl Model {
             steps_per_link: scene.solver.steps_per_link,
             max_dt: scene.solver.max_dt_s,
             freeze_speed: scene.solver.freeze_speed_m_s,
+            bang_step_rad: scene.solver.bang_step_rad,
+            joint_softness: SpringCoefficients::new(
+                scene.solver.joint_hz,
+                SpringCoefficients::<Real>::joint_defaults().damping_ratio,
+            ),
             friction: scene.friction,
             g: scene.g_m_s2,
             half_b: 0.5 * b,
@@ -364,10 +386,11 @@ impl Model {
         InteractionGroups::new(TAPE_GROUP, FLOOR_GROUP, InteractionTestMode::And)
     }
 
-    /// The coil's contact: the osculating circle of the midline at its lowest point.
-    fn ball_builder(spiral: &Spiral, psi: f64, friction: f64) -> ColliderBuilder {
+    /// The coil's contact: the osculating circle of the midline at its lowest point, shrunk
+    /// by `chord_ratio` (see `refit_ball`).
+    fn ball_builder(spiral: &Spiral, psi: f64, chord_ratio: f64, friction: f64) -> ColliderBuilder {
         let c = spiral.curvature_centre(psi);
-        ColliderBuilder::ball(spiral.curvature_radius(psi))
+        ColliderBuilder::ball(spiral.curvature_radius(psi) * chord_ratio)
             .density(0.0)
             .friction(friction)
             .position(Pose::from_translation(Vector::new(c[0], c[1])))
@@ -409,8 +432,9 @@ impl Model {
         k + p
     }
 
-    /// The next step's length: at least `steps_per_link` steps per link angle turned by the
-    /// fastest spinning body, and at most `max_dt`.
+    /// The next step's length, at most `max_dt`: while rolling, at least `steps_per_link`
+    /// steps per link angle turned by the fastest spinning body; in the bang, no body turns
+    /// by more than `bang_step_rad` in a step.
     fn next_dt(&self) -> f64 {
         let spin = self
             .world
@@ -419,8 +443,14 @@ impl Model {
             .filter(|(_, b)| b.is_dynamic())
             .map(|(_, b)| b.angvel().abs())
             .fold(0.0, f64::max);
+        // While the coil rolls, the step resolves the shedding; in the bang no link is shed
+        // and the step only has to keep the free links' rotations small.
+        let turn = match self.phase {
+            Phase::Rolling => self.link_angle / self.steps_per_link,
+            _ => self.bang_step_rad,
+        };
         if spin > 0.0 {
-            (self.link_angle / (self.steps_per_link * spin)).min(self.max_dt)
+            (turn / spin).min(self.max_dt)
         } else {
             self.max_dt
         }
@@ -533,6 +563,9 @@ impl Model {
     /// stands on its own curved contact; a collider there would touch the floor just before
     /// the node arrives, a corner impact on every link.
     fn lay_link(&mut self, k: usize, handle: RigidBodyHandle) {
+        if !self.world.bodies[handle].colliders().is_empty() {
+            return;
+        }
         let link = self.links[k];
         let half = 0.5 * link.length_m;
         self.world.insert_collider(
@@ -556,7 +589,8 @@ impl Model {
             let joint = RevoluteJointBuilder::new()
                 .local_anchor1(Vector::new(-prev_half, 0.0))
                 .local_anchor2(Vector::new(half, 0.0))
-                .contacts_enabled(false);
+                .contacts_enabled(false)
+                .softness(self.joint_softness);
             self.world.insert_impulse_joint(prev.body, body, joint);
         } else if k > 0 {
             let node = self.world.bodies[body]
@@ -565,7 +599,8 @@ impl Model {
             let joint = RevoluteJointBuilder::new()
                 .local_anchor1(node)
                 .local_anchor2(Vector::new(half, 0.0))
-                .contacts_enabled(false);
+                .contacts_enabled(false)
+                .softness(self.joint_softness);
             self.world.insert_impulse_joint(self.ground, body, joint);
         }
     }
@@ -596,6 +631,11 @@ impl Model {
             self.unpin_from_coil(prev.body, coil);
         }
         self.join_near_node(k, handle);
+        if k == 0 {
+            // The tape's free end has no previous link to rest on: without a floor contact
+            // it would droop below the floor until laid, and be pushed out then.
+            self.lay_link(k, handle);
+        }
         self.free.push_back(FreeLink {
             index: k,
             body: handle,
@@ -608,7 +648,8 @@ impl Model {
             RevoluteJointBuilder::new()
                 .local_anchor1(Vector::new(-half, 0.0))
                 .local_anchor2(Vector::new(far[0], far[1]))
-                .contacts_enabled(false),
+                .contacts_enabled(false)
+                .softness(self.joint_softness),
         );
         // Remove the link's mass from the coil, keeping the velocity field.
         let link = self.links[k];
@@ -641,9 +682,7 @@ impl Model {
             });
         }
         for link in self.free.clone() {
-            if self.world.bodies[link.body].colliders().is_empty() {
-                self.lay_link(link.index, link.body);
-            }
+            self.lay_link(link.index, link.body);
         }
         self.world.remove_body(coil);
         self.coil = None;
@@ -689,7 +728,8 @@ impl Model {
                 let joint = RevoluteJointBuilder::new()
                     .local_anchor1(node)
                     .local_anchor2(Vector::new(next_half, 0.0))
-                    .contacts_enabled(false);
+                    .contacts_enabled(false)
+                    .softness(self.joint_softness);
                 self.world
                     .insert_impulse_joint(self.ground, next.body, joint);
             }
