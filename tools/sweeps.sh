@@ -3,7 +3,7 @@
 # (sweep.csv, report.md and the SVGs). Each study is one `uncoil sweep` and one
 # `uncoil sweep-report`; runs go one at a time (--jobs 1) so that each run's wall time is
 # its own, not shared with another run.
-# Usage: tools/sweeps.sh [STUDY ...]   (default: all; about 3 minutes on 2 cores)
+# Usage: tools/sweeps.sh [STUDY ...]   (default: all; 1-3 minutes on 2 cores)
 #        REPORT_ONLY=1 tools/sweeps.sh [STUDY ...]   redraws the reports from the sweep.csv files
 #   yoga-pareto   yoga mat: resolution x adaptive step rule x solver iterations
 #   yoga-links    yoga mat: convergence in the resolution (links per turn)
