@@ -1,5 +1,5 @@
-//! The `uncoil` command line: `uncoil run SCENE [--out DIR]`,
-//! `uncoil check [DIR] [--out DIR]` and `uncoil compare SCENE...`.
+//! The `uncoil` command line: `uncoil run SCENE [--out DIR] [--set KEY=VALUE]...`,
+//! `uncoil check`, `uncoil compare`, `uncoil sweep`, `uncoil sweep-report`, `uncoil plot`.
 //!
 //! Results go to stdout, diagnostics to stderr. Exit codes: 0 success, 1 a failure during
 //! the run (e.g. an output file could not be written), 2 bad input (scene or usage), 3 a
@@ -16,6 +16,7 @@ use uncoil::check;
 use uncoil::compare::{SampleLog, table};
 use uncoil::guard::Status;
 use uncoil::output::{CsvObserver, ReportObserver, summary};
+use uncoil::overrides::{Override, scene_file_with_overrides};
 use uncoil::run::{Observer, run};
 use uncoil::scene::Scene;
 
@@ -39,6 +40,18 @@ enum Command {
         /// Output folder (default: runs/<scene name>).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Override a scene value, e.g. `--set discretisation.links_per_turn=64` (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<Override>,
+    },
+    /// Run a scene over the product grid of the varied keys, one row per run in sweep.csv.
+    Sweep(sweep_cmd::SweepArgs),
+    /// Report on a sweep: Pareto and convergence plots (SVG) and report.md (also on stdout).
+    SweepReport(sweep_cmd::ReportArgs),
+    /// Draw a run's motion.svg and energy.svg from its samples.csv and report.json.
+    Plot {
+        /// A run's output folder, e.g. runs/yoga-mat.
+        dir: PathBuf,
     },
     /// Run every scene of a folder (the hard cases), verify the outputs, print a table.
     /// Exit 0 when every case ends with a stated reason and sound outputs, else 1.
@@ -58,12 +71,28 @@ enum Command {
     },
 }
 
+mod sweep_cmd;
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Check { dir, out } => check(dir, out),
-        Command::Run { scene, out } => {
-            let scene = match Scene::from_file(&scene) {
+        Command::Sweep(args) => sweep_cmd::sweep(args),
+        Command::SweepReport(args) => sweep_cmd::report(&args),
+        Command::Plot { dir } => match uncoil::plot::plot_run(&dir) {
+            Ok(files) => {
+                for f in files {
+                    println!("wrote {}", f.display());
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::from(1)
+            }
+        },
+        Command::Run { scene, out, set } => {
+            let scene = match scene_file_with_overrides(&scene, &set) {
                 Ok(s) => s,
                 Err(e) => {
                     eprintln!("error: {e}");

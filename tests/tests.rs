@@ -4,4 +4,5 @@ mod cli;
 mod fuzz;
 mod hard;
 mod sim;
+mod sweep;
 mod variants;

@@ -1,0 +1,615 @@
+//! Pictures as SVG (plotters, no system fonts needed): a run's motion and energy ledger
+//! against the references, read back from its `samples.csv` and `report.json`, and a
+//! sweep's Pareto plot and convergence plots from a [`SweepAnalysis`]. It computes nothing
+//! new: every number drawn is in those files or in the analysis.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
+use plotters::prelude::*;
+
+use crate::analysis::{PowerFit, SweepAnalysis};
+use crate::sweep::SweepTable;
+
+type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+
+/// A log-log chart on an SVG area.
+type LogChart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
+/// A linear chart on an SVG area.
+type LinChart<'a, 'b> =
+    ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+const FONT: &str = "sans-serif";
+
+fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
+    anyhow::anyhow!("cannot draw: {e}")
+}
+
+/// Finite `(x, y)` pairs.
+fn pairs(x: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
+    x.iter()
+        .zip(y)
+        .filter(|(a, b)| a.is_finite() && b.is_finite())
+        .map(|(a, b)| (*a, *b))
+        .collect()
+}
+
+/// The range of the finite values of `vs`, widened by 5% (or by 1 if flat).
+fn range(vs: impl IntoIterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = vs
+        .into_iter()
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let pad = if hi > lo { 0.05 * (hi - lo) } else { 1.0 };
+    (lo - pad, hi + pad)
+}
+
+/// The range of the finite positive values of `vs`, widened by a factor 1.3 each way.
+fn log_range(vs: impl IntoIterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = vs
+        .into_iter()
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold((f64::INFINITY, 0.0_f64), |(a, b), v| (a.min(v), b.max(v)));
+    if !lo.is_finite() {
+        return (0.1, 1.0);
+    }
+    (lo / 1.3, hi * 1.3)
+}
+
+/// One curve of a line chart.
+struct Curve<'a> {
+    label: &'a str,
+    points: Vec<(f64, f64)>,
+    color: RGBColor,
+    dashed: bool,
+}
+
+fn line_chart(
+    area: &Area<'_>,
+    caption: &str,
+    x_desc: &str,
+    y_desc: &str,
+    curves: &[Curve<'_>],
+    legend_at: SeriesLabelPosition,
+    extra: impl FnOnce(&mut LinChart<'_, '_>) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let (x0, x1) = range(curves.iter().flat_map(|c| c.points.iter().map(|p| p.0)));
+    let (y0, y1) = range(curves.iter().flat_map(|c| c.points.iter().map(|p| p.1)));
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (FONT, 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .light_line_style(WHITE.mix(0.0))
+        .draw()
+        .map_err(err)?;
+    for c in curves {
+        let color = c.color;
+        let style = color.stroke_width(2);
+        if c.dashed {
+            chart
+                .draw_series(DashedLineSeries::new(c.points.iter().copied(), 8, 5, style))
+                .map_err(err)?
+        } else {
+            chart
+                .draw_series(LineSeries::new(c.points.iter().copied(), style))
+                .map_err(err)?
+        }
+        .label(c.label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+    }
+    extra(&mut chart)?;
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(legend_at)
+        .label_font((FONT, 14))
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}
+
+const SIM: RGBColor = RGBColor(0, 0, 0);
+const EXACT: RGBColor = RGBColor(31, 119, 180);
+const EQ7: RGBColor = RGBColor(214, 39, 40);
+
+/// Draws `dir/motion.svg` (r and x' against time, with the exact-geometry model and
+/// eq. (7), up to the final bang) and `dir/energy.svg` (kinetic, potential and lost
+/// energy over the whole run, with MgR, E0 and the drop at the bang) from the run's
+/// `samples.csv` and `report.json`. Returns the files written.
+pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    let samples = SweepTable::read(&dir.join("samples.csv"))?;
+    let report_path = dir.join("report.json");
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(&report_path)
+            .with_context(|| format!("cannot read {}", report_path.display()))?,
+    )
+    .with_context(|| format!("{} is not JSON", report_path.display()))?;
+    let ledger = &report["ledger"];
+    let num = |v: &serde_json::Value, what: &str| {
+        v.as_f64()
+            .with_context(|| format!("{}: no number `{what}`", report_path.display()))
+    };
+    let mgr = num(&ledger["mgr_j"], "ledger.mgr_j")?;
+    let e0 = num(&ledger["e0_j"], "ledger.e0_j")?;
+    let bang_j = num(
+        &ledger["dissipated_by_bang_j"],
+        "ledger.dissipated_by_bang_j",
+    )?;
+    let bang_t = ledger["bang_time_s"].as_f64();
+    let name = report["scene"]["name"].as_str().unwrap_or("run").to_owned();
+    let col = |c: &str| {
+        samples
+            .numbers(c)
+            .with_context(|| format!("samples.csv has no `{c}` column"))
+    };
+    let t = col("t_s")?;
+    let upto = t
+        .iter()
+        .position(|&ti| bang_t.is_some_and(|b| ti > b))
+        .unwrap_or(t.len());
+    let tr = &t[..upto];
+    let cut = |c: &str| col(c).map(|v| v[..upto].to_vec());
+
+    let motion = dir.join("motion.svg");
+    {
+        let root = SVGBackend::new(&motion, (900, 800)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let panels = root.split_evenly((2, 1));
+        let r = [cut("r_m")?, cut("r_geo_m")?, cut("r_ref_m")?];
+        line_chart(
+            &panels[0],
+            &format!("{name}: equivalent coil radius r = R sqrt(1 - laid fraction)"),
+            "t (s)",
+            "r (m)",
+            &[
+                Curve {
+                    label: "simulation",
+                    points: pairs(tr, &r[0]),
+                    color: SIM,
+                    dashed: false,
+                },
+                Curve {
+                    label: "exact-geometry model",
+                    points: pairs(tr, &r[1]),
+                    color: EXACT,
+                    dashed: true,
+                },
+                Curve {
+                    label: "eq. (7)",
+                    points: pairs(tr, &r[2]),
+                    color: EQ7,
+                    dashed: true,
+                },
+            ],
+            SeriesLabelPosition::UpperLeft,
+            |_| Ok(()),
+        )?;
+        let v = [cut("xdot_m_s")?, cut("xdot_geo_m_s")?, cut("xdot_ref_m_s")?];
+        line_chart(
+            &panels[1],
+            &format!("{name}: contact-line speed x', up to the final bang"),
+            "t (s)",
+            "x' (m/s)",
+            &[
+                Curve {
+                    label: "simulation",
+                    points: pairs(tr, &v[0]),
+                    color: SIM,
+                    dashed: false,
+                },
+                Curve {
+                    label: "exact-geometry model",
+                    points: pairs(tr, &v[1]),
+                    color: EXACT,
+                    dashed: true,
+                },
+                Curve {
+                    label: "eq. (7)",
+                    points: pairs(tr, &v[2]),
+                    color: EQ7,
+                    dashed: true,
+                },
+            ],
+            SeriesLabelPosition::UpperLeft,
+            |_| Ok(()),
+        )?;
+        root.present().map_err(err)?;
+    }
+
+    let energy = dir.join("energy.svg");
+    {
+        let root = SVGBackend::new(&energy, (900, 500)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let k = col("kinetic_j")?;
+        let p = col("potential_j")?;
+        let d = col("dissipated_j")?;
+        let (t0, t1) = (
+            t.first().copied().unwrap_or(0.0),
+            t.last().copied().unwrap_or(1.0),
+        );
+        let caption = match bang_t {
+            Some(b) => format!(
+                "{name}: energy ledger; the final bang at t = {b:.3} s dissipates {bang_j:.3} J = {:.2} MgR",
+                bang_j / mgr
+            ),
+            None => format!("{name}: energy ledger (no final bang reached)"),
+        };
+        line_chart(
+            &root,
+            &caption,
+            "t (s)",
+            "energy (J)",
+            &[
+                Curve {
+                    label: "kinetic",
+                    points: pairs(&t, &k),
+                    color: EXACT,
+                    dashed: false,
+                },
+                Curve {
+                    label: "potential (above the floor)",
+                    points: pairs(&t, &p),
+                    color: RGBColor(44, 160, 44),
+                    dashed: false,
+                },
+                Curve {
+                    label: "lost so far",
+                    points: pairs(&t, &d),
+                    color: EQ7,
+                    dashed: false,
+                },
+                Curve {
+                    label: "MgR",
+                    points: vec![(t0, mgr), (t1, mgr)],
+                    color: RGBColor(127, 127, 127),
+                    dashed: true,
+                },
+                Curve {
+                    label: "E0",
+                    points: vec![(t0, e0), (t1, e0)],
+                    color: SIM,
+                    dashed: true,
+                },
+            ],
+            SeriesLabelPosition::MiddleLeft,
+            |chart| {
+                if let Some(b) = bang_t {
+                    let (y0, y1) = range(k.iter().chain(&p).chain(&d).copied().chain([e0, mgr]));
+                    let c = RGBColor(148, 103, 189);
+                    chart
+                        .draw_series(DashedLineSeries::new(
+                            [(b, y0), (b, y1)],
+                            4,
+                            4,
+                            c.stroke_width(1),
+                        ))
+                        .map_err(err)?
+                        .label("final bang begins")
+                        .legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1))
+                        });
+                }
+                Ok(())
+            },
+        )?;
+        root.present().map_err(err)?;
+    }
+    Ok(vec![motion, energy])
+}
+
+fn log_chart<'a, 'b>(
+    area: &'a Area<'b>,
+    caption: &str,
+    x_desc: &str,
+    y_desc: &str,
+    xs: impl IntoIterator<Item = f64>,
+    ys: impl IntoIterator<Item = f64>,
+) -> anyhow::Result<LogChart<'a, 'b>> {
+    let (x0, x1) = log_range(xs);
+    let (y0, y1) = log_range(ys);
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (FONT, 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(80)
+        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .x_labels(20)
+        .y_labels(20)
+        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .light_line_style(WHITE.mix(0.0))
+        .draw()
+        .map_err(err)?;
+    Ok(chart)
+}
+
+fn legend<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>,
+    pos: SeriesLabelPosition,
+) -> anyhow::Result<()> {
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(pos)
+        .label_font((FONT, 13))
+        .draw()
+        .map_err(|e| anyhow::anyhow!("cannot draw: {e}"))
+}
+
+fn color(i: usize) -> RGBColor {
+    const C: [RGBColor; 8] = [
+        RGBColor(31, 119, 180),
+        RGBColor(214, 39, 40),
+        RGBColor(44, 160, 44),
+        RGBColor(255, 127, 14),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(23, 190, 207),
+    ];
+    C[i % C.len()]
+}
+
+/// `p ± se` of a fit.
+fn order(f: &PowerFit) -> String {
+    if f.order_se.is_finite() {
+        format!("{:.2} ± {:.2}", f.order, f.order_se)
+    } else {
+        format!("{:.2}", f.order)
+    }
+}
+
+/// Draws a fitted power law over `[h0, h1]` and names its order in the legend.
+fn fit_line<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>,
+    fit: &PowerFit,
+    h: &[f64],
+    label: String,
+    c: RGBColor,
+) -> anyhow::Result<()> {
+    let (lo, hi) = h
+        .iter()
+        .filter(|v| v.is_finite() && **v > 0.0)
+        .fold((f64::INFINITY, 0.0_f64), |(a, b), &v| (a.min(v), b.max(v)));
+    if !lo.is_finite() {
+        return Ok(());
+    }
+    chart
+        .draw_series(DashedLineSeries::new(
+            [(lo, fit.eval(lo)), (hi, fit.eval(hi))],
+            6,
+            4,
+            c.stroke_width(1),
+        ))
+        .map_err(|e| anyhow::anyhow!("cannot draw: {e}"))?
+        .label(label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1)));
+    Ok(())
+}
+
+/// Draws a sweep's pictures into `dir`: `pareto.svg` (error against cost, log-log, one
+/// series per contact model / solver setting, the front joined) and, per varied numeric
+/// key, `convergence-<key>.svg` (error and energy lost before the bang against the step
+/// size with the fitted orders, and the wall time per step against links). Returns the
+/// files written.
+pub fn plot_sweep(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create output folder {}", dir.display()))?;
+    let mut written = Vec::new();
+
+    let pareto = dir.join("pareto.svg");
+    {
+        let root = SVGBackend::new(&pareto, (900, 600)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let idx: Vec<usize> = (0..a.cost.len())
+            .filter(|&i| a.cost[i].is_finite() && a.err[i].is_finite() && a.err[i] > 0.0)
+            .collect();
+        let mut chart = log_chart(
+            &root,
+            &format!("{title}: error against wall time"),
+            &format!("wall time, {} (s)", a.cost_column),
+            &format!("max |time error| vs {}", a.reference.label()),
+            idx.iter().map(|&i| a.cost[i]).chain(a.target.map(|t| t.1)),
+            idx.iter().map(|&i| a.err[i]).chain(a.target.map(|t| t.0)),
+        )?;
+        let mut names: Vec<&String> = idx.iter().map(|&i| &a.series[i]).collect();
+        names.sort();
+        names.dedup();
+        for (si, name) in names.iter().enumerate() {
+            let c = color(si);
+            let pts: Vec<(f64, f64)> = idx
+                .iter()
+                .filter(|&&i| &&a.series[i] == name)
+                .map(|&i| (a.cost[i], a.err[i]))
+                .collect();
+            let label = if name.is_empty() {
+                "runs".to_owned()
+            } else {
+                (*name).clone()
+            };
+            chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))
+                .map_err(err)?
+                .label(label)
+                .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
+        }
+        let front: Vec<(f64, f64)> = a
+            .front
+            .iter()
+            .filter(|&&i| a.err[i] > 0.0)
+            .map(|&i| (a.cost[i], a.err[i]))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(front, BLACK.stroke_width(1)))
+            .map_err(err)?
+            .label("Pareto front")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+        if let Some((e, c)) = a.target {
+            let (x0, _) = log_range(idx.iter().map(|&i| a.cost[i]).chain([c]));
+            let (y0, _) = log_range(idx.iter().map(|&i| a.err[i]).chain([e]));
+            let grey = RGBColor(127, 127, 127);
+            chart
+                .draw_series(DashedLineSeries::new(
+                    [(x0, e), (c, e), (c, y0)],
+                    6,
+                    4,
+                    grey.stroke_width(2),
+                ))
+                .map_err(err)?
+                .label(format!("target: <= {:.2}% in <= {c} s", 100.0 * e))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey));
+        }
+        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        root.present().map_err(err)?;
+    }
+    written.push(pareto);
+
+    let mut keys: Vec<&String> = a.studies.iter().map(|s| &s.key).collect();
+    keys.dedup();
+    for key in keys {
+        let studies: Vec<_> = a.studies.iter().filter(|s| &s.key == key).collect();
+        let path = dir.join(format!("convergence-{key}.svg"));
+        let root = SVGBackend::new(&path, (900, 1200)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let panels = root.split_evenly((3, 1));
+        let h_desc = format!("step h of {key} (1/value unless the key is in s or m)");
+        for (panel, which) in panels.iter().take(2).zip(0..) {
+            let (ys, fits): (Vec<&Vec<f64>>, Vec<Option<PowerFit>>) = studies
+                .iter()
+                .map(|s| {
+                    if which == 0 {
+                        (&s.err, s.err_fit)
+                    } else {
+                        (&s.lost, s.lost_fit)
+                    }
+                })
+                .unzip();
+            let caption = if which == 0 {
+                format!("{title}: max |time error| vs {}", a.reference.label())
+            } else {
+                format!("{title}: energy lost before the bang")
+            };
+            let mut chart = log_chart(
+                panel,
+                &caption,
+                &h_desc,
+                if which == 0 { "error" } else { "lost / E0" },
+                studies.iter().flat_map(|s| s.h.iter().copied()),
+                ys.iter().flat_map(|y| y.iter().copied()).chain(
+                    studies
+                        .iter()
+                        .filter(|_| which == 0)
+                        .flat_map(|s| s.self_err.iter().copied()),
+                ),
+            )?;
+            for (si, (s, (y, fit))) in studies.iter().zip(ys.iter().zip(&fits)).enumerate() {
+                let c = color(si);
+                let pts: Vec<(f64, f64)> = pairs(&s.h, y)
+                    .into_iter()
+                    .filter(|p| p.0 > 0.0 && p.1 > 0.0)
+                    .collect();
+                let group = if s.group.is_empty() || studies.len() == 1 {
+                    String::new()
+                } else {
+                    format!("{}: ", s.group)
+                };
+                chart
+                    .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))
+                    .map_err(err)?
+                    .label(format!("{group}runs"))
+                    .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
+                if let Some(f) = fit {
+                    fit_line(
+                        &mut chart,
+                        f,
+                        &s.h,
+                        format!("{group}fit: order {} (R² {:.3})", order(f), f.r2),
+                        c,
+                    )?;
+                }
+                if which == 0 {
+                    let pts: Vec<(f64, f64)> = pairs(&s.h, &s.self_err)
+                        .into_iter()
+                        .filter(|p| p.0 > 0.0 && p.1 > 0.0)
+                        .collect();
+                    chart
+                        .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.stroke_width(1))))
+                        .map_err(err)?
+                        .label(format!("{group}change from the finest run"))
+                        .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.stroke_width(1)));
+                    if let Some(f) = &s.self_fit {
+                        fit_line(
+                            &mut chart,
+                            f,
+                            &s.h,
+                            format!(
+                                "{group}self-convergence: order {} (R² {:.3})",
+                                order(f),
+                                f.r2
+                            ),
+                            c,
+                        )?;
+                    }
+                }
+            }
+            legend(&mut chart, SeriesLabelPosition::LowerRight)?;
+        }
+        let mut chart = log_chart(
+            &panels[2],
+            &format!("{title}: wall time per step against links"),
+            "links",
+            "wall time per step (s)",
+            studies.iter().flat_map(|s| s.links.iter().copied()),
+            studies
+                .iter()
+                .flat_map(|s| s.wall_per_step_s.iter().copied()),
+        )?;
+        for (si, s) in studies.iter().enumerate() {
+            let c = color(si);
+            let pts = pairs(&s.links, &s.wall_per_step_s);
+            chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))
+                .map_err(err)?
+                .label(if s.group.is_empty() || studies.len() == 1 {
+                    "runs".to_owned()
+                } else {
+                    s.group.clone()
+                })
+                .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
+            if let Some(f) = &s.cost_fit {
+                fit_line(
+                    &mut chart,
+                    f,
+                    &s.links,
+                    format!("slope {} (R² {:.3})", order(f), f.r2),
+                    c,
+                )?;
+            }
+        }
+        legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+        root.present().map_err(err)?;
+        written.push(path.clone());
+    }
+    Ok(written)
+}

@@ -1,0 +1,256 @@
+//! The `sweep` and `sweep-report` subcommands of the binary: arguments, output folders,
+//! messages and exit codes around [`uncoil::sweep`], [`uncoil::analysis`] and
+//! [`uncoil::plot`]. No sweep logic lives here.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Args, ValueEnum};
+
+use uncoil::analysis::{Reference, SweepAnalysis};
+use uncoil::output::write_atomic;
+use uncoil::sweep::{Shard, Sweep, SweepOptions, SweepTable, Vary, merge, write_merged};
+
+/// Arguments of `uncoil sweep`.
+#[derive(Args)]
+pub struct SweepArgs {
+    /// The scene file (TOML) to vary.
+    #[arg(required_unless_present = "merge")]
+    scene: Option<PathBuf>,
+    /// A key and its values, e.g. `--vary discretisation.links_per_turn=16,32,64`; several
+    /// give the product grid (the last varies fastest). One value fixes a key.
+    #[arg(long = "vary", value_name = "KEY=V1,V2,...")]
+    vary: Vec<Vary>,
+    /// Run only the K-th of N interleaved slices of the grid (for array jobs), into
+    /// sweep.K-of-N.csv.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<Shard>,
+    /// Runs at once (default: one per core). Wall times are per run, so runs sharing the
+    /// cores slow each other down: use --jobs 1 for timings.
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Output folder (default: sweeps/<scene name>; with --merge, the first file's folder).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// No progress on stderr.
+    #[arg(long)]
+    quiet: bool,
+    /// Join shard files (sweep.K-of-N.csv) into OUT/sweep.csv instead of running.
+    #[arg(long, num_args = 1.., value_name = "FILES", conflicts_with_all = ["scene", "vary", "shard", "jobs"])]
+    merge: Vec<PathBuf>,
+}
+
+/// Which error a report uses.
+#[derive(Clone, Copy, ValueEnum)]
+enum RefArg {
+    /// The exact-geometry model: the simulation's own error.
+    Exact,
+    /// The continuum eq. (7).
+    Eq7,
+}
+
+/// Which wall time is the cost.
+#[derive(Clone, Copy, ValueEnum)]
+enum CostArg {
+    /// The unroll, up to the final bang (`wall_rolling_s`).
+    Unroll,
+    /// The whole run, bang included (`wall_s`).
+    Total,
+}
+
+/// Arguments of `uncoil sweep-report`.
+#[derive(Args)]
+pub struct ReportArgs {
+    /// A sweep file (sweep.csv).
+    sweep: PathBuf,
+    /// Output folder for report.md and the SVGs (default: the sweep file's folder).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// The error's reference.
+    #[arg(long, value_enum, default_value = "exact")]
+    reference: RefArg,
+    /// The wall time used as the cost.
+    #[arg(long, value_enum, default_value = "unroll")]
+    cost: CostArg,
+    /// Title of the report and plots (default: the name of the sweep's folder).
+    #[arg(long)]
+    title: Option<String>,
+    /// Fit convergence only in these varied keys (repeatable; default: every numeric one).
+    #[arg(long, value_name = "KEY", conflicts_with = "no_convergence")]
+    converge: Vec<String>,
+    /// A target to mark and report: the largest error (a fraction, e.g. 0.003) and the
+    /// largest wall time in s, e.g. `--target 0.003,0.3`.
+    #[arg(long, value_name = "ERROR,WALL_S", value_parser = parse_target)]
+    target: Option<(f64, f64)>,
+    /// A varied key whose values are repetitions (e.g. `--vary name=rep1,rep2,rep3`): runs
+    /// that differ only in it are fitted together (repeatable).
+    #[arg(long, value_name = "KEY")]
+    repeat_key: Vec<String>,
+    /// No convergence fits or plots: the Pareto plot and the table only.
+    #[arg(long)]
+    no_convergence: bool,
+}
+
+fn parse_target(s: &str) -> Result<(f64, f64), String> {
+    let bad = || format!("`{s}`: expected ERROR,WALL_S with both > 0, e.g. 0.003,0.3");
+    let (e, w) = s.split_once(',').ok_or_else(bad)?;
+    let e: f64 = e.trim().parse().map_err(|_| bad())?;
+    let w: f64 = w.trim().parse().map_err(|_| bad())?;
+    if e > 0.0 && w > 0.0 && e.is_finite() && w.is_finite() {
+        Ok((e, w))
+    } else {
+        Err(bad())
+    }
+}
+
+fn folder_of(p: &Path) -> PathBuf {
+    p.parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
+}
+
+/// `uncoil sweep`: 0 every run ended, 1 a run failed or a file could not be written,
+/// 2 bad input (a combination's scene is invalid).
+pub fn sweep(args: SweepArgs) -> ExitCode {
+    if !args.merge.is_empty() {
+        let dir = args.out.unwrap_or_else(|| folder_of(&args.merge[0]));
+        return match merge(&args.merge).and_then(|t| {
+            let rows = t.rows.len();
+            write_merged(&t, &dir).map(|p| (p, rows))
+        }) {
+            Ok((p, rows)) => {
+                println!("merged {rows} runs into {}", p.display());
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::from(1)
+            }
+        };
+    }
+    let scene_path = args.scene.expect("clap requires SCENE without --merge");
+    let text = match std::fs::read_to_string(&scene_path) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!(
+                "error: cannot read scene file {}: {e}",
+                scene_path.display()
+            );
+            return ExitCode::from(2);
+        }
+    };
+    let stem = scene_path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let sweep = match Sweep::new(&text, &stem, &args.vary) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let dir = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("sweeps").join(&stem));
+    let opts = SweepOptions {
+        shard: args.shard.unwrap_or(Shard::ALL),
+        jobs: args.jobs,
+        progress: !args.quiet,
+    };
+    eprintln!(
+        "sweeping {} ({} combinations{}) into {} ...",
+        scene_path.display(),
+        sweep.len(),
+        if opts.shard == Shard::ALL {
+            String::new()
+        } else {
+            format!(", shard {}/{}", opts.shard.k, opts.shard.n)
+        },
+        dir.display()
+    );
+    match sweep.run(&dir, &opts) {
+        Ok(o) => {
+            println!(
+                "{} runs ({} failed) of {} combinations written to {}",
+                o.runs,
+                o.failed,
+                o.grid,
+                o.path.display()
+            );
+            if o.failed > 0 {
+                ExitCode::from(1)
+            } else {
+                ExitCode::SUCCESS
+            }
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// `uncoil sweep-report`: 0 written, 1 a file could not be read or written.
+pub fn report(args: &ReportArgs) -> ExitCode {
+    match write_report(args) {
+        Ok(md) => {
+            print!("{md}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn write_report(args: &ReportArgs) -> anyhow::Result<String> {
+    let table = SweepTable::read(&args.sweep)?;
+    let reference = match args.reference {
+        RefArg::Exact => Reference::Exact,
+        RefArg::Eq7 => Reference::Eq7,
+    };
+    let cost = match args.cost {
+        CostArg::Unroll => "wall_rolling_s",
+        CostArg::Total => "wall_s",
+    };
+    let dir = args.out.clone().unwrap_or_else(|| folder_of(&args.sweep));
+    let title = args.title.clone().unwrap_or_else(|| {
+        std::fs::canonicalize(&dir)
+            .ok()
+            .and_then(|d| d.file_name().map(|n| n.to_string_lossy().into_owned()))
+            .unwrap_or_else(|| "sweep".into())
+    });
+    let mut analysis = SweepAnalysis::new(table, reference, cost, &args.repeat_key)?;
+    analysis.target = args.target;
+    if args.no_convergence {
+        analysis.studies.clear();
+    } else if !args.converge.is_empty() {
+        let varied = analysis.table.varied_keys();
+        for k in &args.converge {
+            anyhow::ensure!(
+                varied.contains(k),
+                "--converge {k}: not a varied key of this sweep (varied: {})",
+                varied.join(", ")
+            );
+        }
+        analysis.studies.retain(|s| args.converge.contains(&s.key));
+    }
+    let files = uncoil::plot::plot_sweep(&analysis, &dir, &title)?;
+    let mut md = analysis.markdown(&title);
+    md.push_str("\nPlots: ");
+    md.push_str(
+        &files
+            .iter()
+            .map(|f| {
+                let name = f.file_name().unwrap_or_default().to_string_lossy();
+                format!("[{name}]({name})")
+            })
+            .collect::<Vec<_>>()
+            .join(", "),
+    );
+    md.push('\n');
+    write_atomic(&dir.join("report.md"), md.as_bytes())?;
+    Ok(md)
+}

@@ -1,0 +1,255 @@
+//! `uncoil sweep`, `sweep --merge`, `sweep-report`, `plot` and `run --set` end to end, on
+//! the yoga mat at coarse resolutions (a run takes well under a second).
+
+use std::path::{Path, PathBuf};
+
+use assert_cmd::Command;
+use predicates::prelude::*;
+
+use uncoil::sweep::SweepTable;
+
+fn yoga() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/yoga-mat.toml")
+}
+
+fn uncoil() -> Command {
+    Command::cargo_bin("uncoil").unwrap()
+}
+
+/// Two cheap runs: 8 and 16 links per turn, no time given to the final bang.
+const VARY: [&str; 4] = [
+    "--vary",
+    "discretisation.links_per_turn=8,16",
+    "--vary",
+    "stop.settle_time_s=0",
+];
+
+fn sweep(out: &Path, extra: &[&str]) -> assert_cmd::assert::Assert {
+    uncoil()
+        .arg("sweep")
+        .arg(yoga())
+        .args(VARY)
+        .arg("--out")
+        .arg(out)
+        .args(["--jobs", "1"])
+        .args(extra)
+        .assert()
+}
+
+fn cell(t: &SweepTable, row: usize, col: &str) -> String {
+    t.rows[row][t.column(col).unwrap_or_else(|| panic!("no column {col}"))].clone()
+}
+
+fn number(t: &SweepTable, row: usize, col: &str) -> f64 {
+    cell(t, row, col)
+        .parse()
+        .unwrap_or_else(|_| panic!("{col} of row {row} is not a number"))
+}
+
+/// The columns that must agree between two runs of the same combination (all but the
+/// wall times and the worker count).
+fn deterministic(t: &SweepTable) -> Vec<Vec<String>> {
+    let skip = ["wall_s", "wall_rolling_s", "jobs"];
+    t.rows
+        .iter()
+        .map(|r| {
+            r.iter()
+                .zip(&t.header)
+                .filter(|(_, h)| !skip.contains(&h.as_str()))
+                .map(|(c, _)| c.clone())
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn sweep_shards_merge_and_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("full");
+    sweep(&full, &["--quiet"])
+        .success()
+        .stdout(predicate::str::contains(
+            "2 runs (0 failed) of 2 combinations",
+        ));
+    let t = SweepTable::read(&full.join("sweep.csv")).unwrap();
+    assert_eq!(
+        t.varied_keys(),
+        ["discretisation.links_per_turn", "stop.settle_time_s"]
+    );
+    assert_eq!(t.rows.len(), 2, "one row per run");
+    let mut by_index = t.clone();
+    by_index
+        .rows
+        .sort_by_key(|r| r[0].parse::<usize>().unwrap());
+    let t = by_index;
+    assert_eq!(cell(&t, 0, "discretisation.links_per_turn"), "8");
+    assert_eq!(cell(&t, 1, "discretisation.links_per_turn"), "16");
+    for r in 0..2 {
+        assert_eq!(cell(&t, r, "status"), "ok");
+        assert_eq!(cell(&t, r, "jobs"), "1");
+        assert!(number(&t, r, "wall_rolling_s") <= number(&t, r, "wall_s"));
+        assert!(number(&t, r, "steps") > 100.0);
+    }
+    // 11 turns of the yoga mat: 88 and 176 links.
+    assert_eq!(cell(&t, 0, "links"), "88");
+    assert_eq!(cell(&t, 1, "links"), "176");
+    // Physics: doubling the resolution brings the run closer to the exact-geometry model
+    // (README: about 2.6% at 8 links per turn, 0.6% at 16) and loses less energy.
+    let (e8, e16) = (number(&t, 0, "max_err_geo"), number(&t, 1, "max_err_geo"));
+    assert!(
+        e16 < 0.5 * e8 && e16 < 0.02,
+        "max |error| vs exact: {e8:.4} at 8, {e16:.4} at 16 links per turn; expected a halving at least"
+    );
+    let (l8, l16) = (
+        number(&t, 0, "lost_before_bang_of_e0"),
+        number(&t, 1, "lost_before_bang_of_e0"),
+    );
+    assert!(
+        l16 < l8,
+        "energy lost before the bang: {l8:.4} at 8, {l16:.4} at 16"
+    );
+    // Eq. (7) is ~7% slow for this thick mat at any resolution.
+    let e7 = number(&t, 1, "max_err_eq7");
+    assert!(
+        (0.03..0.12).contains(&e7),
+        "max |error| vs eq. 7 {e7:.4}, expected ~0.07"
+    );
+
+    // Two shards into one folder, then merged: the same rows as the full sweep.
+    let shards = dir.path().join("shards");
+    sweep(&shards, &["--quiet", "--shard", "1/2"])
+        .success()
+        .stdout(predicate::str::contains(
+            "1 runs (0 failed) of 2 combinations",
+        ));
+    sweep(&shards, &["--quiet", "--shard", "2/2"]).success();
+    let s1 = shards.join("sweep.1-of-2.csv");
+    let s2 = shards.join("sweep.2-of-2.csv");
+    assert_eq!(SweepTable::read(&s1).unwrap().rows[0][0], "0");
+    assert_eq!(SweepTable::read(&s2).unwrap().rows[0][0], "1");
+    uncoil()
+        .args(["sweep", "--merge"])
+        .arg(&s2)
+        .arg(&s1)
+        .assert()
+        .success()
+        .stdout(predicate::str::contains("merged 2 runs into"));
+    let merged = SweepTable::read(&shards.join("sweep.csv")).unwrap();
+    assert_eq!(merged.header, t.header);
+    assert_eq!(
+        deterministic(&merged),
+        deterministic(&t),
+        "shards + merge differ from the full sweep"
+    );
+    // A combination found twice is refused.
+    uncoil()
+        .args(["sweep", "--merge"])
+        .arg(&s1)
+        .arg(&s1)
+        .arg("--out")
+        .arg(dir.path().join("twice"))
+        .assert()
+        .code(1)
+        .stderr(predicate::str::contains("combination 0 is in both"));
+
+    // The report: Markdown on stdout and in report.md, and the SVGs.
+    uncoil()
+        .arg("sweep-report")
+        .arg(full.join("sweep.csv"))
+        .args(["--title", "tiny"])
+        .assert()
+        .success()
+        .stdout(predicate::str::starts_with("# tiny\n"))
+        .stdout(predicate::str::contains(
+            "| `discretisation.links_per_turn` |",
+        ));
+    for f in [
+        "report.md",
+        "pareto.svg",
+        "convergence-discretisation.links_per_turn.svg",
+    ] {
+        let text = std::fs::read_to_string(full.join(f)).unwrap();
+        assert!(!text.is_empty(), "{f} is empty");
+    }
+    assert!(
+        std::fs::read_to_string(full.join("pareto.svg"))
+            .unwrap()
+            .contains("<svg")
+    );
+}
+
+#[test]
+fn sweep_with_a_bad_value_exits_2_and_runs_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    uncoil()
+        .arg("sweep")
+        .arg(yoga())
+        .args(["--vary", "solver.max_dt_s=0.001,0.5"])
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(2)
+        .stdout(predicate::str::is_empty())
+        .stderr(predicate::str::contains(
+            "error: combination 1 (solver.max_dt_s=0.5): solver.max_dt_s = 0.5: must be > 0 and <= 0.1",
+        ));
+    assert!(!out.exists(), "output folder {} was created", out.display());
+    uncoil()
+        .arg("sweep")
+        .arg(yoga())
+        .args(["--vary", "solver.max_dt=0.001"])
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("unknown field `max_dt`"));
+    uncoil()
+        .arg("sweep")
+        .arg(yoga())
+        .args(["--shard", "3/2"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("expected K/N with 1 <= K <= N"));
+}
+
+#[test]
+fn run_with_set_then_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    uncoil()
+        .arg("run")
+        .arg(yoga())
+        .args(["--set", "discretisation.links_per_turn=12"])
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success()
+        .stdout(predicate::str::contains("132 links (12 per turn)"));
+    uncoil()
+        .arg("plot")
+        .arg(&out)
+        .assert()
+        .success()
+        .stdout(predicate::str::contains("motion.svg"))
+        .stdout(predicate::str::contains("energy.svg"));
+    let energy = std::fs::read_to_string(out.join("energy.svg")).unwrap();
+    assert!(energy.starts_with("<svg"), "not an SVG");
+    assert!(energy.contains("MgR"), "the energy plot names MgR");
+    assert!(
+        std::fs::read_to_string(out.join("motion.svg"))
+            .unwrap()
+            .contains("exact-geometry model")
+    );
+    uncoil()
+        .arg("run")
+        .arg(yoga())
+        .args(["--set", "discretisation.links_per_turn=5000"])
+        .arg("--out")
+        .arg(dir.path().join("bad"))
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains(
+            "discretisation.links_per_turn = 5000: must be >= 3 and <= 4096",
+        ));
+}

@@ -1,0 +1,106 @@
+#!/usr/bin/env bash
+# The speed-against-error figures of the README, written to docs/sweeps/<study>/
+# (sweep.csv, report.md and the SVGs). Each study is one `uncoil sweep` and one
+# `uncoil sweep-report`; runs go one at a time (--jobs 1) so that each run's wall time is
+# its own, not shared with another run.
+# Usage: tools/sweeps.sh [STUDY ...]   (default: all; 1-3 minutes on 2 cores)
+#        REPORT_ONLY=1 tools/sweeps.sh [STUDY ...]   redraws the reports from the sweep.csv files
+#   yoga-pareto   yoga mat: resolution x adaptive step rule x solver iterations
+#   yoga-links    yoga mat: convergence in the resolution (links per turn)
+#   yoga-dt       yoga mat: convergence in the largest time step (max_dt_s, 1 step per link)
+#   yoga-rule     yoga mat: convergence in the adaptive step rule (steps per link)
+#   yoga-iter     yoga mat: convergence in the solver iterations
+#   thin-pareto   thin tape: resolution x time step, against eq. (7)
+#   scaling       both scenes: wall time per step and per simulated second against links
+#   yoga-run      the yoga mat's run plots (motion.svg, energy.svg) into docs/yoga-mat/
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --release --locked --quiet
+bin=target/release/uncoil
+docs=docs/sweeps
+yoga=scenes/yoga-mat.toml
+thin=scenes/thin-tape.toml
+# The final bang is not part of the unroll that these figures are about: give it no time.
+nobang=(--vary stop.settle_time_s=0)
+
+study() { # name scene [sweep args...] -- [report args...]
+  local name=$1 scene=$2
+  shift 2
+  local sweep_args=() report_args=()
+  while [ $# -gt 0 ] && [ "$1" != "--" ]; do sweep_args+=("$1"); shift; done
+  [ $# -gt 0 ] && shift
+  report_args=("$@")
+  echo "== $name" >&2
+  if [ -z "${REPORT_ONLY:-}" ]; then
+    "$bin" sweep "$scene" --jobs 1 --quiet --out "$docs/$name" "${sweep_args[@]}"
+  fi
+  rm -f "$docs/$name"/*.svg
+  "$bin" sweep-report "$docs/$name/sweep.csv" "${report_args[@]}" > /dev/null
+}
+
+run_study() {
+  case $1 in
+  yoga-pareto)
+    study yoga-pareto $yoga \
+      --vary discretisation.links_per_turn=12,16,24,32,48,64,96 \
+      --vary solver.steps_per_link=1,2,4,8 --vary solver.iterations=2,4,8 \
+      --vary solver.max_dt_s=0.1 "${nobang[@]}" \
+      -- --title "yoga mat" --no-convergence --target 0.003,0.3 ;;
+  yoga-links)
+    study yoga-links $yoga \
+      --vary discretisation.links_per_turn=16,32,64,128,256 \
+      --vary solver.steps_per_link=8 --vary solver.iterations=16 "${nobang[@]}" \
+      -- --title "yoga mat, resolution" ;;
+  yoga-dt)
+    study yoga-dt $yoga \
+      --vary discretisation.links_per_turn=32,64 --vary solver.steps_per_link=1 \
+      --vary solver.iterations=8 \
+      --vary solver.max_dt_s=0.02,0.01,0.005,0.0025,0.00125,0.000625 "${nobang[@]}" \
+      -- --title "yoga mat, time step" --converge solver.max_dt_s ;;
+  yoga-rule)
+    study yoga-rule $yoga \
+      --vary discretisation.links_per_turn=64 --vary solver.max_dt_s=0.1 \
+      --vary solver.iterations=8 \
+      --vary solver.steps_per_link=1,2,4,8,16 "${nobang[@]}" \
+      -- --title "yoga mat, adaptive step rule" ;;
+  yoga-iter)
+    study yoga-iter $yoga \
+      --vary discretisation.links_per_turn=128 --vary solver.steps_per_link=8 \
+      --vary solver.iterations=2,4,8,16,32 "${nobang[@]}" \
+      -- --title "yoga mat, solver iterations" ;;
+  thin-pareto)
+    study thin-pareto $thin \
+      --vary discretisation.links_per_turn=12,16,24,32,48 \
+      --vary solver.max_dt_s=0.002,0.001,0.0005 "${nobang[@]}" \
+      -- --title "thin tape" --reference eq7 --converge discretisation.links_per_turn \
+      --target 0.01,15
+    # The same runs against the exact-geometry model, the reference the runs converge to.
+    rm -f "$docs/thin-pareto/vs-exact"/*.svg
+    "$bin" sweep-report "$docs/thin-pareto/sweep.csv" --out "$docs/thin-pareto/vs-exact" \
+      --title "thin tape" --reference exact --converge discretisation.links_per_turn > /dev/null ;;
+  scaling)
+    # Fixed dt = 1e-4 s (the adaptive rule never binds at 1 step per link), the first
+    # 1 s; five repetitions (the scene name is a no-op key) give the spread.
+    # Yoga mat: 11 turns, so 91, 909 and 4096 (the maximum) links per turn are about
+    # 1k, 10k and 45k links. Thin tape: 300 turns, 7 (the fewest that fit the outer turn),
+    # 33 and 333 links per turn are about 2.1k, 10k and 100k links.
+    local fixed=(--vary solver.max_dt_s=0.0001 --vary solver.steps_per_link=1
+                 --vary stop.max_time_s=1 --vary name=rep1,rep2,rep3,rep4,rep5)
+    study scaling-yoga $yoga --vary discretisation.links_per_turn=91,909,4096 "${fixed[@]}" \
+      -- --title "yoga mat, cost against links" --converge discretisation.links_per_turn \
+      --repeat-key name
+    study scaling-thin $thin --vary discretisation.links_per_turn=7,33,333 "${fixed[@]}" \
+      -- --title "thin tape, cost against links" --converge discretisation.links_per_turn \
+      --repeat-key name ;;
+  yoga-run)
+    echo "== yoga-run" >&2
+    "$bin" run $yoga --out runs/yoga-mat > /dev/null
+    "$bin" plot runs/yoga-mat > /dev/null
+    mkdir -p docs/yoga-mat
+    cp runs/yoga-mat/motion.svg runs/yoga-mat/energy.svg docs/yoga-mat/ ;;
+  *) echo "unknown study $1" >&2; exit 2 ;;
+  esac
+}
+
+all=(yoga-pareto yoga-links yoga-dt yoga-rule yoga-iter thin-pareto scaling yoga-run)
+for s in "${@:-${all[@]}}"; do run_study "$s"; done
