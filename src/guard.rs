@@ -13,9 +13,10 @@ use crate::scene::Scene;
 use crate::spiral::Spiral;
 
 /// A run stops when its total energy rises above E0 by this fraction of the scene's energy
-/// scale, the larger of |E0| and M g R: every loss in the model dissipates, so a rise
+/// scale, the largest of |E0|, M g R and, on a slope, M g sin(slope) L (what the whole tape
+/// of length L can release along it): every loss in the model dissipates, so a rise
 /// beyond rounding is the engine adding energy. (E0 alone is no scale: a tape hanging from
-/// an axis starts with E0 ~ 0.)
+/// an axis starts with E0 ~ 0, and a mat rolling 30 degrees downhill gains ten times E0.)
 pub const ENERGY_RISE_TOLERANCE: f64 = 0.01;
 /// A run stops when a joint separates by more than this many tape thicknesses b (the midline
 /// broken at the tape's own scale) and by more than [`JOINT_GAP_PER_LINK`] of the outermost
@@ -77,7 +78,15 @@ impl Bounds {
         let length = tape_length_m(scene);
         Self {
             energy_rise_j: ENERGY_RISE_TOLERANCE
-                * e0_j.abs().max(t.mass_kg * scene.g_m_s2 * t.outer_radius_m),
+                * e0_j
+                    .abs()
+                    .max(t.mass_kg * scene.g_m_s2 * t.outer_radius_m)
+                    .max(
+                        t.mass_kg
+                            * scene.g_m_s2
+                            * scene.slope_deg.to_radians().sin().abs()
+                            * length,
+                    ),
             joint_gap_m: (JOINT_GAP_PER_THICKNESS * t.thickness_m)
                 .max(JOINT_GAP_PER_LINK * outer_link_m(scene)),
             penetration_m: PENETRATION_PER_RADIUS * t.outer_radius_m,
@@ -140,7 +149,7 @@ impl Guard {
         if rise > b.energy_rise_j {
             return Some(format!(
                 "energy rising at t = {:.6} s: E - E0 = {rise:.4e} J, above the bound {:.4e} J \
-                 ({} % of the larger of |E0| and M g R)",
+                 ({} % of the energy scale: the largest of |E0|, M g R, M g L sin(slope))",
                 obs.t_s,
                 b.energy_rise_j,
                 100.0 * ENERGY_RISE_TOLERANCE

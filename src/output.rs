@@ -357,7 +357,7 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
     );
     let _ = writeln!(
         o,
-        "Max energy rise above E0 {:+.2e} of max(|E0|, MgR) (bound {:.0e}); fastest spin {:.4e} rad/s.",
+        "Max energy rise above E0 {:+.2e} of the energy scale (bound {:.0e}); fastest spin {:.4e} rad/s.",
         report.max_energy_rise_rel,
         crate::guard::ENERGY_RISE_TOLERANCE,
         report.max_spin_rad_s

@@ -173,8 +173,8 @@ pub struct RunReport {
     pub stop_reason: String,
     /// The guards' bounds the run was held to.
     pub bounds: Bounds,
-    /// Largest rise of the total energy above E0 over the run, over the scene's energy scale,
-    /// the larger of |E0| and M g R (0 if it never rose).
+    /// Largest rise of the total energy above E0 over the run, over the scene's energy scale
+    /// (see [`crate::guard::ENERGY_RISE_TOLERANCE`]; 0 if it never rose).
     pub max_energy_rise_rel: f64,
     /// Fastest spin of any body over the run (rad/s).
     pub max_spin_rad_s: f64,

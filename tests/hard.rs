@@ -344,6 +344,8 @@ fn every_hard_case_ends_with_a_stated_reason() {
         "big-core",
         "coarsest-links",
         "bang-1e4",
+        "slope-down-30",
+        "slope-up-10",
     ] {
         assert!(
             matches!(case(name).outcome, uncoil::check::Outcome::Completed(_)),
