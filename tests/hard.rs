@@ -338,7 +338,6 @@ fn every_hard_case_ends_with_a_stated_reason() {
     for name in [
         "thin-300",
         "push-10",
-        "frictionless",
         "friction-0.05",
         "zero-gravity",
         "big-core",
