@@ -9,6 +9,8 @@
 #   yoga-links    yoga mat: convergence in the resolution (links per turn)
 #   yoga-dt       yoga mat: convergence in the largest time step (max_dt_s, 1 step per link)
 #   yoga-rule     yoga mat: convergence in the adaptive step rule (steps per link)
+#   yoga-rule-fine  the same at 256 links per turn, where the resolution's own error
+#                 (0.002 %) no longer hides the step's against the exact model
 #   yoga-iter     yoga mat: convergence in the solver iterations
 #   thin-pareto   thin tape: resolution x time step, against eq. (7)
 #   scaling       both scenes: wall time per step and per simulated second against links
@@ -63,6 +65,12 @@ run_study() {
       --vary solver.iterations=8 \
       --vary solver.steps_per_link=1,2,4,8,16 "${nobang[@]}" \
       -- --title "yoga mat, adaptive step rule" ;;
+  yoga-rule-fine)
+    study yoga-rule-fine $yoga \
+      --vary discretisation.links_per_turn=256 --vary solver.max_dt_s=0.1 \
+      --vary solver.iterations=8 \
+      --vary solver.steps_per_link=1,2,4,8 "${nobang[@]}" \
+      -- --title "yoga mat, adaptive step rule at 256 links per turn" ;;
   yoga-iter)
     study yoga-iter $yoga \
       --vary discretisation.links_per_turn=128 --vary solver.steps_per_link=8 \
@@ -102,5 +110,5 @@ run_study() {
   esac
 }
 
-all=(yoga-pareto yoga-links yoga-dt yoga-rule yoga-iter thin-pareto scaling yoga-run)
+all=(yoga-pareto yoga-links yoga-dt yoga-rule yoga-rule-fine yoga-iter thin-pareto scaling yoga-run)
 for s in "${@:-${all[@]}}"; do run_study "$s"; done
