@@ -6,6 +6,9 @@
 //! [`reference`](mod@reference) (pure `f64`) -> [`run`] (loop, samples, report) -> [`output`] (files and
 //! the summary).
 
+pub mod frame;
+pub mod inspect;
+pub mod mcap_log;
 pub mod model;
 pub mod output;
 pub mod reference;

@@ -1,4 +1,5 @@
 //! Integration tests: one binary, so the engine links once.
 
 mod cli;
+mod mcap;
 mod sim;
