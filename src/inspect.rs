@@ -54,6 +54,10 @@ pub fn read_inventory(path: &Path) -> anyhow::Result<Inventory> {
 
 /// Takes the inventory of an MCAP file in memory.
 pub fn inventory(bytes: &[u8]) -> anyhow::Result<Inventory> {
+    anyhow::ensure!(
+        bytes.starts_with(mcap::MAGIC),
+        "not an MCAP file (it does not start with the MCAP magic bytes)"
+    );
     let finished = matches!(mcap::read::Summary::read(bytes), Ok(Some(_)));
     let mut library = String::new();
     let mut metadata = BTreeMap::new();

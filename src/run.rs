@@ -304,16 +304,18 @@ pub fn run_until(
         max_gap = max_gap.max(obs.max_joint_gap_m);
         max_pen = max_pen.max(obs.max_penetration_m);
         let mut events = Vec::new();
+        let (detached_before, detach_j_before) =
+            prev.map_or((0, 0.0), |p| (p.detached, p.ledger.detach_j));
+        if obs.detached > detached_before && obs.phase == Phase::Rolling {
+            events.push(Event::Detach {
+                t_s: obs.t_s,
+                first_link: detached_before,
+                links: obs.detached - detached_before,
+                detached: obs.detached,
+                energy_lost_j: obs.ledger.detach_j - detach_j_before,
+            });
+        }
         if let Some(p) = prev {
-            if obs.detached > p.detached && obs.phase == Phase::Rolling {
-                events.push(Event::Detach {
-                    t_s: obs.t_s,
-                    first_link: p.detached,
-                    links: obs.detached - p.detached,
-                    detached: obs.detached,
-                    energy_lost_j: obs.ledger.detach_j - p.ledger.detach_j,
-                });
-            }
             if obs.phase == Phase::Rolling && obs.dt_s > 0.0 {
                 xdot = (obs.x_m - p.x_m) / obs.dt_s;
             }
