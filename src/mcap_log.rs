@@ -177,20 +177,6 @@ impl Observer for McapObserver {
             .compression_level(1)
             .library(format!("uncoil {version}"))
             .create(BufWriter::new(file))?;
-        let no_meta = BTreeMap::new();
-        let scene_schema = writer.add_schema(
-            "foxglove.SceneUpdate",
-            "jsonschema",
-            SCENE_UPDATE_SCHEMA.as_bytes(),
-        )?;
-        let state_schema =
-            writer.add_schema("uncoil.State", "jsonschema", STATE_SCHEMA.as_bytes())?;
-        let event_schema =
-            writer.add_schema("uncoil.Event", "jsonschema", EVENT_SCHEMA.as_bytes())?;
-        let scene_ch = writer.add_channel(scene_schema, SCENE_TOPIC, "json", &no_meta)?;
-        let state_ch = writer.add_channel(state_schema, STATE_TOPIC, "json", &no_meta)?;
-        let events_ch = writer.add_channel(event_schema, EVENTS_TOPIC, "json", &no_meta)?;
-
         writer.write_metadata(&metadata(
             "scene",
             &[
@@ -228,6 +214,23 @@ impl Observer for McapObserver {
                 ),
             ],
         ))?;
+        // Schemas and channels go into the first chunk, beside the first messages: written
+        // before the metadata, they would fill a chunk of their own, without messages and
+        // so without message indexes, which Foxglove Studio refuses to read.
+        let no_meta = BTreeMap::new();
+        let scene_schema = writer.add_schema(
+            "foxglove.SceneUpdate",
+            "jsonschema",
+            SCENE_UPDATE_SCHEMA.as_bytes(),
+        )?;
+        let state_schema =
+            writer.add_schema("uncoil.State", "jsonschema", STATE_SCHEMA.as_bytes())?;
+        let event_schema =
+            writer.add_schema("uncoil.Event", "jsonschema", EVENT_SCHEMA.as_bytes())?;
+        let scene_ch = writer.add_channel(scene_schema, SCENE_TOPIC, "json", &no_meta)?;
+        let state_ch = writer.add_channel(state_schema, STATE_TOPIC, "json", &no_meta)?;
+        let events_ch = writer.add_channel(event_schema, EVENTS_TOPIC, "json", &no_meta)?;
+
         self.state = Some(Open {
             writer,
             scene: scene_ch,

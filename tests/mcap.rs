@@ -139,6 +139,16 @@ fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
         rows,
         "/state vs samples.csv rows"
     );
+    // Foxglove Studio reads no chunk without message indexes (a chunk of schemas and
+    // channels alone would be one).
+    assert!(!r.summary.chunk_indexes.is_empty());
+    for c in &r.summary.chunk_indexes {
+        assert!(
+            c.message_index_length > 0,
+            "chunk at {} has no message index",
+            c.chunk_start_offset
+        );
+    }
     let stats = r.summary.stats.as_ref().unwrap();
     let total: usize = r.messages.values().map(Vec::len).sum();
     assert_eq!(stats.message_count, total as u64);

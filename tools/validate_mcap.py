@@ -7,7 +7,8 @@ Reads the file with the `mcap` package (PyPI) and checks each message with `json
   dist/jsonschema), and its messages are validated against that official schema;
 - a channel with the project's own schema (`uncoil.*`) is validated against the schema
   embedded in the file, which must itself be a valid JSON schema;
-- every channel is JSON-encoded with a `jsonschema` schema, and its log times never go back.
+- every channel is JSON-encoded with a `jsonschema` schema, and its log times never go back;
+- every chunk has message indexes (Foxglove Studio reads no chunk without them).
 
 With --self-test it also writes a copy of the file in which one /scene message is broken
 (an entity's frame_id becomes a number) and checks that the copy fails validation.
@@ -104,6 +105,11 @@ def validate(path, official):
                 problems.append(
                     f"{topic} #{message.sequence} at /{path_text}: {error.message[:200]}"
                 )
+    if summary is not None:
+        # Foxglove Studio refuses a chunk without message indexes.
+        for c in summary.chunk_indexes:
+            if c.message_index_length == 0:
+                problems.append(f"chunk at {c.chunk_start_offset} has no message index")
     if summary is not None and summary.statistics is not None:
         total = sum(counts.values())
         if summary.statistics.message_count != total:
