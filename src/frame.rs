@@ -87,6 +87,8 @@ impl GhostSpiral {
 pub struct Frame {
     /// Simulated time (s).
     pub t_s: f64,
+    /// Contact-line position of the simulation, `x_m` of its sample (m).
+    pub contact_x_m: f64,
     /// Nodes of the links that left the coil (laid, hanging or in the bang), from the outer
     /// end; consecutive nodes bound a link.
     pub off_coil_m: Vec<[f64; 2]>,

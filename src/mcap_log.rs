@@ -16,6 +16,10 @@
 //! - `/events`: detaches (one message per step that shed links, normally one link), the
 //!   start and the end of the final bang with its energies, warnings (schema `uncoil.Event`).
 //!
+//! - `/tf`: `foxglove.FrameTransforms` (official schema, vendored likewise), one with each
+//!   drawing: the frame `contact` at the simulation's contact line on the floor, so that a
+//!   3D view following it keeps the coil in sight along the 2 m of a yoga mat.
+//!
 //! Metadata records: `scene` (name, file text), `tool` (name, version), `resolution`,
 //! `solver`, and at the end `run` (stop reason, steps, times) and `ledger`.
 //!
@@ -41,6 +45,8 @@ use crate::scene::Scene;
 
 /// The official `foxglove.SceneUpdate` JSON schema (npm `@foxglove/schemas` 2.1.0).
 pub const SCENE_UPDATE_SCHEMA: &str = include_str!("../schemas/foxglove/SceneUpdate.json");
+/// The official `foxglove.FrameTransforms` JSON schema (npm `@foxglove/schemas` 2.1.0).
+pub const FRAME_TRANSFORMS_SCHEMA: &str = include_str!("../schemas/foxglove/FrameTransforms.json");
 /// The JSON schema of `/state` messages.
 pub const STATE_SCHEMA: &str = include_str!("../schemas/uncoil.State.json");
 /// The JSON schema of `/events` messages.
@@ -52,6 +58,8 @@ pub const SCENE_TOPIC: &str = "/scene";
 pub const STATE_TOPIC: &str = "/state";
 /// Topic of the events.
 pub const EVENTS_TOPIC: &str = "/events";
+/// Topic of the frame transforms.
+pub const TF_TOPIC: &str = "/tf";
 
 /// Target uncompressed size of a chunk (bytes): the unit that survives a crash.
 const CHUNK_SIZE: u64 = 1024 * 1024;
@@ -75,7 +83,8 @@ struct Open {
     scene: u16,
     state: u16,
     events: u16,
-    sequence: [u32; 3],
+    tf: u16,
+    sequence: [u32; 4],
     painter: Painter,
 }
 
@@ -103,7 +112,7 @@ impl McapObserver {
         let Some(open) = self.state.as_mut() else {
             return Ok(());
         };
-        let channel_id = [open.scene, open.state, open.events][which];
+        let channel_id = [open.scene, open.state, open.events, open.tf][which];
         let sequence = open.sequence[which];
         open.sequence[which] += 1;
         let ns = stamp_ns(t_s);
@@ -227,16 +236,23 @@ impl Observer for McapObserver {
             writer.add_schema("uncoil.State", "jsonschema", STATE_SCHEMA.as_bytes())?;
         let event_schema =
             writer.add_schema("uncoil.Event", "jsonschema", EVENT_SCHEMA.as_bytes())?;
+        let tf_schema = writer.add_schema(
+            "foxglove.FrameTransforms",
+            "jsonschema",
+            FRAME_TRANSFORMS_SCHEMA.as_bytes(),
+        )?;
         let scene_ch = writer.add_channel(scene_schema, SCENE_TOPIC, "json", &no_meta)?;
         let state_ch = writer.add_channel(state_schema, STATE_TOPIC, "json", &no_meta)?;
         let events_ch = writer.add_channel(event_schema, EVENTS_TOPIC, "json", &no_meta)?;
+        let tf_ch = writer.add_channel(tf_schema, TF_TOPIC, "json", &no_meta)?;
 
         self.state = Some(Open {
             writer,
             scene: scene_ch,
             state: state_ch,
             events: events_ch,
-            sequence: [0; 3],
+            tf: tf_ch,
+            sequence: [0; 4],
             painter: Painter::new(scene),
         });
         Ok(())
@@ -252,7 +268,9 @@ impl Observer for McapObserver {
             return Ok(());
         };
         let data = serde_json::to_vec(&open.painter.paint(frame))?;
-        self.write(0, frame.t_s, &data)
+        let tf = serde_json::to_vec(&contact_transform(frame))?;
+        self.write(0, frame.t_s, &data)?;
+        self.write(3, frame.t_s, &tf)
     }
 
     fn observe_event(&mut self, event: &Event) -> anyhow::Result<()> {
@@ -423,6 +441,34 @@ struct SceneEntityDeletion {
     #[serde(rename = "type")]
     kind: u8,
     id: &'static str,
+}
+
+#[derive(Serialize)]
+struct FrameTransform {
+    timestamp: Time,
+    parent_frame_id: &'static str,
+    child_frame_id: &'static str,
+    translation: Vector3,
+    rotation: Quaternion,
+}
+
+#[derive(Serialize)]
+struct FrameTransforms {
+    transforms: [FrameTransform; 1],
+}
+
+/// The frame `contact`: the simulation's contact line on the floor, unrotated.
+fn contact_transform(frame: &Frame) -> FrameTransforms {
+    let pose = Pose::at(um(frame.contact_x_m), 0.0);
+    FrameTransforms {
+        transforms: [FrameTransform {
+            timestamp: Time::at(frame.t_s),
+            parent_frame_id: "world",
+            child_frame_id: "contact",
+            translation: pose.position,
+            rotation: pose.orientation,
+        }],
+    }
 }
 
 #[derive(Serialize)]
@@ -659,6 +705,7 @@ mod tests {
         let painter = Painter::new(&scene());
         let frame = Frame {
             t_s: 1.5,
+            contact_x_m: 0.01,
             off_coil_m: vec![[0.0, 0.002], [0.01, 0.002]],
             on_coil_m: vec![],
             eq7: None,

@@ -279,7 +279,7 @@ pub fn run_until(
     };
     let mut next_frame = frame_interval;
     if frame_interval.is_finite() {
-        let frame = make_frame(scene, &model, &refs, 0.0);
+        let frame = make_frame(scene, &model, &refs, 0.0, 0.0);
         for o in observers.iter_mut() {
             o.observe_frame(&frame)?;
         }
@@ -377,7 +377,7 @@ pub fn run_until(
             next_sample = obs.t_s + scene.sample_interval_s;
         }
         if obs.t_s >= next_frame || (last_step && frame_interval.is_finite()) {
-            let frame = make_frame(scene, &model, &refs, obs.t_s);
+            let frame = make_frame(scene, &model, &refs, obs.t_s, obs.x_m);
             for o in observers.iter_mut() {
                 o.observe_frame(&frame)?;
             }
@@ -476,11 +476,18 @@ pub fn run_until(
 /// Points per turn of the exact-geometry ghost spiral.
 const GHOST_POINTS_PER_TURN: u32 = 32;
 
-fn make_frame(scene: &Scene, model: &Model, refs: &References, t_s: f64) -> Frame {
+fn make_frame(
+    scene: &Scene,
+    model: &Model,
+    refs: &References,
+    t_s: f64,
+    contact_x_m: f64,
+) -> Frame {
     let (off_coil_m, on_coil_m) = model.link_nodes();
     let b = scene.tape.thickness_m;
     Frame {
         t_s,
+        contact_x_m,
         off_coil_m,
         on_coil_m,
         eq7: GhostDisc::at(&refs.continuum, b, t_s),

@@ -114,6 +114,7 @@ fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
         ("/events", "uncoil.Event"),
         ("/scene", "foxglove.SceneUpdate"),
         ("/state", "uncoil.State"),
+        ("/tf", "foxglove.FrameTransforms"),
     ];
     assert_eq!(
         r.channels.keys().map(String::as_str).collect::<Vec<_>>(),
@@ -165,6 +166,18 @@ fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
         frames + 2
     );
     assert_eq!(stats.message_start_time, 0, "the first drawing is at t = 0");
+    // One transform of the frame `contact` with each drawing, following the contact line.
+    assert_eq!(r.messages["/tf"].len(), scene_n);
+    let tf_last = &r.messages["/tf"].last().unwrap().1["transforms"][0];
+    assert_eq!(tf_last["child_frame_id"], "contact");
+    let x_state = r.messages["/state"].last().unwrap().1["x_m"]
+        .as_f64()
+        .unwrap();
+    let x_tf = tf_last["translation"]["x"].as_f64().unwrap();
+    assert!(
+        (x_tf - x_state).abs() <= 1e-6 && x_tf > 1.0,
+        "contact frame at {x_tf} m, last sample's x_m {x_state} m"
+    );
     assert_eq!(stats.message_end_time, ns(t_end));
 
     // Time order, and each /state message stamped with its own t_s.
