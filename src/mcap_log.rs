@@ -10,7 +10,10 @@
 //!   `ghost/eq7` (the coil of eq. 7: a circle with a spoke showing its rotation) and
 //!   `ghost/exact` (the exact-geometry model's wound spiral), each in its own colour. Every
 //!   message carries every entity, so a seek redraws the whole scene from one message; a
-//!   ghost past its reference's end is deleted. Coordinates are rounded to 1 µm.
+//!   ghost past its reference's end is deleted. Coordinates are rounded to 1 µm; a line
+//!   keeps only the nodes that stand out by more than b/20 from a straight run (the flat
+//!   laid tape becomes a few segments) and at most 2048 points (a thin tape's thousands of
+//!   wound links are then drawn through every k-th node).
 //! - `/state`: one message per sample with the fields of `samples.csv` (schema
 //!   `uncoil.State`, `schemas/uncoil.State.json`); a reference past its end is left out.
 //! - `/events`: detaches (one message per step that shed links, normally one link), the
@@ -482,6 +485,60 @@ fn um(v: f64) -> f64 {
     (v * 1e6).round() / 1e6
 }
 
+/// Most points drawn for one line: a longer line (the wound part of a thin tape, thousands
+/// of links) is drawn through every k-th node, its ends kept. A drawing only.
+const MAX_LINE_POINTS: usize = 2048;
+
+/// The points of a line strip as drawn: the nodes that Douglas-Peucker simplification keeps
+/// at tolerance `tol_m` (the flat laid tape becomes a few segments), then at most
+/// [`MAX_LINE_POINTS`] of them.
+fn drawn(nodes: &[[f64; 2]], tol_m: f64) -> Vec<Vector3> {
+    let n = nodes.len();
+    let mut keep = vec![false; n];
+    if n > 0 {
+        keep[0] = true;
+        keep[n - 1] = true;
+    }
+    let mut stack = vec![(0, n.saturating_sub(1))];
+    while let Some((i, j)) = stack.pop() {
+        let far = (i + 1..j)
+            .map(|k| (k, distance_to_segment(nodes[k], nodes[i], nodes[j])))
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((k, d)) = far
+            && d > tol_m
+        {
+            keep[k] = true;
+            stack.push((i, k));
+            stack.push((k, j));
+        }
+    }
+    let kept: Vec<[f64; 2]> = nodes
+        .iter()
+        .zip(&keep)
+        .filter(|(_, k)| **k)
+        .map(|(p, _)| *p)
+        .collect();
+    let step = kept.len().div_ceil(MAX_LINE_POINTS).max(1);
+    let last = kept.len().saturating_sub(1);
+    kept.iter()
+        .enumerate()
+        .filter(|(i, _)| i % step == 0 || *i == last)
+        .map(|(_, &p)| point(p))
+        .collect()
+}
+
+/// Distance of `p` from the segment from `a` to `b` (m).
+fn distance_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let s = if len2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - s * dx).hypot(p[1] - a[1] - s * dy)
+}
+
 fn point(p: [f64; 2]) -> Vector3 {
     Vector3 {
         x: um(p[0]),
@@ -554,6 +611,8 @@ impl Painter {
         let t = frame.t_s;
         let b = self.thickness_m;
         let ghost = 0.25 * b;
+        // Drawing tolerance: a twentieth of the tape's thickness, the width of its line.
+        let tol = 0.05 * b;
         let mut entities = Vec::with_capacity(5);
         let mut deletions = Vec::new();
 
@@ -588,12 +647,8 @@ impl Painter {
             ),
         ] {
             let mut e = Self::entity(t, id, label);
-            e.lines.push(Self::line(
-                LINE_STRIP,
-                b,
-                color,
-                nodes.iter().map(|&p| point(p)).collect(),
-            ));
+            e.lines
+                .push(Self::line(LINE_STRIP, b, color, drawn(nodes, tol)));
             entities.push(e);
         }
 
@@ -631,7 +686,7 @@ impl Painter {
                 LINE_STRIP,
                 ghost,
                 EXACT,
-                g.points_m.iter().map(|&p| point(p)).collect(),
+                drawn(&g.points_m, tol),
             ));
             entities.push(e);
         } else {
@@ -725,6 +780,31 @@ mod tests {
         }
         // Both ghosts are absent: both are deleted.
         assert_eq!(msg["deletions"].as_array().unwrap().len(), 2);
+    }
+
+    #[test]
+    fn drawing_drops_straight_runs_keeps_bends_and_caps_the_points() {
+        // A flat run, a step up, a flat run: 2 + 2 corners survive, nothing else.
+        let mut nodes: Vec<[f64; 2]> = (0..100).map(|k| [f64::from(k) * 1e-3, 0.0]).collect();
+        nodes.extend((100..200).map(|k| [f64::from(k) * 1e-3, 0.01]));
+        let d = drawn(&nodes, 1e-4);
+        let xy: Vec<(f64, f64)> = d.iter().map(|p| (p.x, p.y)).collect();
+        assert_eq!(
+            xy,
+            [(0.0, 0.0), (0.099, 0.0), (0.1, 0.01), (0.199, 0.01)],
+            "kept {xy:?}"
+        );
+        // A circle keeps every node it needs, up to the cap, and both ends.
+        let circle: Vec<[f64; 2]> = (0..=10_000)
+            .map(|k| {
+                let a = f64::from(k) * 2.0 * std::f64::consts::PI / 10_000.0;
+                [a.cos(), a.sin()]
+            })
+            .collect();
+        let d = drawn(&circle, 1e-12);
+        assert!(d.len() <= MAX_LINE_POINTS + 1, "{} points", d.len());
+        assert!(d.len() > MAX_LINE_POINTS / 2, "{} points", d.len());
+        assert!((d.last().unwrap().x - 1.0).abs() < 1e-9, "the end is kept");
     }
 
     #[test]

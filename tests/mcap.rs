@@ -248,10 +248,30 @@ fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
     let nodes = logged.report.links + 1;
     let first = &r.messages["/scene"][0].1;
     let last = &r.messages["/scene"].last().unwrap().1;
-    assert_eq!(points(&entity(first, "tape/on_coil").unwrap()), nodes);
+    // Lines are simplified for drawing (within b/20): the wound spiral keeps most nodes, the
+    // laid tape, flat on the floor, far fewer, but it still spans the whole tape.
+    let on0 = points(&entity(first, "tape/on_coil").unwrap());
+    assert!(
+        on0 > nodes / 2 && on0 <= nodes,
+        "{on0} of {nodes} wound nodes drawn"
+    );
     assert_eq!(points(&entity(first, "tape/off_coil").unwrap()), 0);
     assert_eq!(points(&entity(last, "tape/on_coil").unwrap()), 0);
-    assert_eq!(points(&entity(last, "tape/off_coil").unwrap()), nodes);
+    let off = entity(last, "tape/off_coil").unwrap();
+    let off_n = points(&off);
+    assert!(
+        off_n >= 2 && off_n < nodes,
+        "{off_n} of {nodes} laid nodes drawn"
+    );
+    let xs: Vec<f64> = off["lines"][0]["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["x"].as_f64().unwrap())
+        .collect();
+    let span =
+        xs.iter().copied().fold(f64::MIN, f64::max) - xs.iter().copied().fold(f64::MAX, f64::min);
+    assert!(span > 2.0, "laid tape drawn over {span} m");
     for id in ["floor", "ghost/eq7", "ghost/exact"] {
         assert!(entity(first, id).is_some(), "{id} drawn at t = 0");
     }
