@@ -182,13 +182,13 @@ pub fn describe(path: &Path, inv: &Inventory) -> String {
     let _ = writeln!(o, "Channels:");
     let _ = writeln!(
         o,
-        "  {:<10} {:<22} {:<11} {:<6} {:>9}",
+        "  {:<10} {:<25} {:<11} {:<6} {:>9}",
         "topic", "schema", "schema enc", "enc", "messages"
     );
     for c in inv.channels.values() {
         let _ = writeln!(
             o,
-            "  {:<10} {:<22} {:<11} {:<6} {:>9}",
+            "  {:<10} {:<25} {:<11} {:<6} {:>9}",
             c.topic, c.schema, c.schema_encoding, c.message_encoding, c.messages
         );
     }

@@ -340,6 +340,34 @@ fn inspect_prints_channels_counts_time_range_metadata_and_ledger() {
 }
 
 #[test]
+fn inspect_reads_a_cut_off_file_as_far_as_its_data_goes() {
+    // A file cut in half, as a crash leaves it: no summary, but the chunks before the cut.
+    let bytes = std::fs::read(logged().dir.join("run.mcap")).unwrap();
+    let whole = uncoil::inspect::inventory(&bytes).unwrap();
+    let half = uncoil::inspect::inventory(&bytes[..bytes.len() / 2]).unwrap();
+    assert!(whole.finished && !half.finished);
+    assert!(half.read_error.is_some());
+    let count = |inv: &uncoil::inspect::Inventory| -> u64 {
+        inv.channels.values().map(|c| c.messages).sum()
+    };
+    assert!(
+        count(&half) > count(&whole) / 4 && count(&half) < count(&whole),
+        "{} of {} messages read from half the file",
+        count(&half),
+        count(&whole)
+    );
+    assert!(half.time_ordered);
+    assert!(
+        half.metadata.contains_key("scene"),
+        "metadata before the cut"
+    );
+    assert!(
+        !half.metadata.contains_key("ledger"),
+        "the ledger comes last"
+    );
+}
+
+#[test]
 fn inspect_of_a_file_that_is_not_mcap_exits_1() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("x.mcap");
