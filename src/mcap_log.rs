@@ -18,7 +18,6 @@
 //!   `uncoil.State`, `schemas/uncoil.State.json`); a reference past its end is left out.
 //! - `/events`: detaches (one message per step that shed links, normally one link), the
 //!   start and the end of the final bang with its energies, warnings (schema `uncoil.Event`).
-//!
 //! - `/tf`: `foxglove.FrameTransforms` (official schema, vendored likewise), one with each
 //!   drawing: the frame `contact` at the simulation's contact line on the floor, so that a
 //!   3D view following it keeps the coil in sight along the 2 m of a yoga mat.
@@ -81,12 +80,20 @@ pub struct McapObserver {
     state: Option<Open>,
 }
 
+/// The channels, in the order of `Open::channels`.
+#[derive(Clone, Copy)]
+enum Channel {
+    Scene,
+    State,
+    Events,
+    Tf,
+}
+
 struct Open {
     writer: Writer<BufWriter<File>>,
-    scene: u16,
-    state: u16,
-    events: u16,
-    tf: u16,
+    /// MCAP channel ids, indexed by [`Channel`].
+    channels: [u16; 4],
+    /// Next sequence number of each channel.
     sequence: [u32; 4],
     painter: Painter,
 }
@@ -111,11 +118,12 @@ impl McapObserver {
         self.path.with_file_name(name)
     }
 
-    fn write(&mut self, which: usize, t_s: f64, data: &[u8]) -> anyhow::Result<()> {
+    fn write(&mut self, channel: Channel, t_s: f64, data: &[u8]) -> anyhow::Result<()> {
         let Some(open) = self.state.as_mut() else {
             return Ok(());
         };
-        let channel_id = [open.scene, open.state, open.events, open.tf][which];
+        let which = channel as usize;
+        let channel_id = open.channels[which];
         let sequence = open.sequence[which];
         open.sequence[which] += 1;
         let ns = stamp_ns(t_s);
@@ -251,10 +259,7 @@ impl Observer for McapObserver {
 
         self.state = Some(Open {
             writer,
-            scene: scene_ch,
-            state: state_ch,
-            events: events_ch,
-            tf: tf_ch,
+            channels: [scene_ch, state_ch, events_ch, tf_ch],
             sequence: [0; 4],
             painter: Painter::new(scene),
         });
@@ -263,7 +268,7 @@ impl Observer for McapObserver {
 
     fn observe_sample(&mut self, sample: &Sample) -> anyhow::Result<()> {
         let data = serde_json::to_vec(&state_message(sample)?)?;
-        self.write(1, sample.t_s, &data)
+        self.write(Channel::State, sample.t_s, &data)
     }
 
     fn observe_frame(&mut self, frame: &Frame) -> anyhow::Result<()> {
@@ -272,13 +277,13 @@ impl Observer for McapObserver {
         };
         let data = serde_json::to_vec(&open.painter.paint(frame))?;
         let tf = serde_json::to_vec(&contact_transform(frame))?;
-        self.write(0, frame.t_s, &data)?;
-        self.write(3, frame.t_s, &tf)
+        self.write(Channel::Scene, frame.t_s, &data)?;
+        self.write(Channel::Tf, frame.t_s, &tf)
     }
 
     fn observe_event(&mut self, event: &Event) -> anyhow::Result<()> {
         let data = serde_json::to_vec(event)?;
-        self.write(2, event.t_s(), &data)
+        self.write(Channel::Events, event.t_s(), &data)
     }
 
     fn observe_final(&mut self, report: &RunReport) -> anyhow::Result<()> {
@@ -818,7 +823,7 @@ mod tests {
         for k in 0..n {
             let t = f64::from(k) * 1e-3;
             let data = format!("{{\"t_s\":{t},\"pad\":\"{}\"}}", "x".repeat(800));
-            mcap.write(1, t, data.as_bytes()).unwrap();
+            mcap.write(Channel::State, t, data.as_bytes()).unwrap();
         }
         // A crash: nothing is flushed or finished, the buffered tail is lost.
         std::mem::forget(mcap);
