@@ -10,10 +10,10 @@
 //!   `ghost/eq7` (the coil of eq. 7: a circle with a spoke showing its rotation) and
 //!   `ghost/exact` (the exact-geometry model's wound spiral), each in its own colour. Every
 //!   message carries every entity, so a seek redraws the whole scene from one message; a
-//!   ghost past its reference's end is deleted. Coordinates are rounded to 1 µm; a line
-//!   keeps only the nodes that stand out by more than b/20 from a straight run (the flat
-//!   laid tape becomes a few segments) and at most 2048 points (a thin tape's thousands of
-//!   wound links are then drawn through every k-th node).
+//!   ghost past its reference's end is deleted. Coordinates are rounded to 1 µm; the tape
+//!   off the coil keeps only the nodes that stand out by more than b/20 from a straight run
+//!   (the flat laid tape becomes a few segments), and a line has at most 2048 points (a
+//!   thin tape's thousands of wound links are then drawn through every k-th node).
 //! - `/state`: one message per sample with the fields of `samples.csv` (schema
 //!   `uncoil.State`, `schemas/uncoil.State.json`); a reference past its end is left out.
 //! - `/events`: detaches (one message per step that shed links, normally one link), the
@@ -494,17 +494,23 @@ fn um(v: f64) -> f64 {
 /// of links) is drawn through every k-th node, its ends kept. A drawing only.
 const MAX_LINE_POINTS: usize = 2048;
 
-/// The points of a line strip as drawn: the nodes that Douglas-Peucker simplification keeps
-/// at tolerance `tol_m` (the flat laid tape becomes a few segments), then at most
-/// [`MAX_LINE_POINTS`] of them.
-fn drawn(nodes: &[[f64; 2]], tol_m: f64) -> Vec<Vector3> {
+/// The points of a line strip as drawn: with a tolerance, the nodes that Douglas-Peucker
+/// simplification keeps (the flat laid tape becomes a few segments); then at most
+/// [`MAX_LINE_POINTS`] of them. A curve of many turns (the wound coil) is not simplified:
+/// Douglas-Peucker splits a spiral unevenly and costs O(n^2) on it.
+fn drawn(nodes: &[[f64; 2]], tol_m: Option<f64>) -> Vec<Vector3> {
     let n = nodes.len();
-    let mut keep = vec![false; n];
+    let mut keep = vec![tol_m.is_none(); n];
     if n > 0 {
         keep[0] = true;
         keep[n - 1] = true;
     }
-    let mut stack = vec![(0, n.saturating_sub(1))];
+    let tol_m = tol_m.unwrap_or(f64::INFINITY);
+    let mut stack = if tol_m.is_finite() {
+        vec![(0, n.saturating_sub(1))]
+    } else {
+        vec![]
+    };
     while let Some((i, j)) = stack.pop() {
         let far = (i + 1..j)
             .map(|k| (k, distance_to_segment(nodes[k], nodes[i], nodes[j])))
@@ -637,18 +643,20 @@ impl Painter {
         });
         entities.push(floor);
 
-        for (id, label, nodes, color) in [
+        for (id, label, nodes, color, tol) in [
             (
                 "tape/off_coil",
                 "simulated tape off the coil",
                 &frame.off_coil_m,
                 TAPE_OFF,
+                Some(tol),
             ),
             (
                 "tape/on_coil",
                 "simulated tape on the coil",
                 &frame.on_coil_m,
                 TAPE_ON,
+                None,
             ),
         ] {
             let mut e = Self::entity(t, id, label);
@@ -691,7 +699,7 @@ impl Painter {
                 LINE_STRIP,
                 ghost,
                 EXACT,
-                drawn(&g.points_m, tol),
+                drawn(&g.points_m, None),
             ));
             entities.push(e);
         } else {
@@ -792,7 +800,7 @@ mod tests {
         // A flat run, a step up, a flat run: 2 + 2 corners survive, nothing else.
         let mut nodes: Vec<[f64; 2]> = (0..100).map(|k| [f64::from(k) * 1e-3, 0.0]).collect();
         nodes.extend((100..200).map(|k| [f64::from(k) * 1e-3, 0.01]));
-        let d = drawn(&nodes, 1e-4);
+        let d = drawn(&nodes, Some(1e-4));
         let xy: Vec<(f64, f64)> = d.iter().map(|p| (p.x, p.y)).collect();
         assert_eq!(
             xy,
@@ -806,7 +814,7 @@ mod tests {
                 [a.cos(), a.sin()]
             })
             .collect();
-        let d = drawn(&circle, 1e-12);
+        let d = drawn(&circle, None);
         assert!(d.len() <= MAX_LINE_POINTS + 1, "{} points", d.len());
         assert!(d.len() > MAX_LINE_POINTS / 2, "{} points", d.len());
         assert!((d.last().unwrap().x - 1.0).abs() < 1e-9, "the end is kept");
