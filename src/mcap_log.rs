@@ -143,12 +143,17 @@ impl McapObserver {
 /// A sample as a `/state` message: a quantity that does not exist (a reference past its
 /// end, `NaN` in the sample, an empty CSV cell) is left out rather than written as `null`,
 /// which Foxglove Studio's JSON-schema reader does not accept as a number type.
-fn state_message(sample: &Sample) -> anyhow::Result<serde_json::Value> {
+fn state_message(sample: &Sample) -> anyhow::Result<Vec<u8>> {
+    let data = serde_json::to_vec(sample)?;
+    // The common case, every quantity present, is written directly.
+    if !data.windows(4).any(|w| w == b"null") {
+        return Ok(data);
+    }
     let mut value = serde_json::to_value(sample)?;
     if let Some(map) = value.as_object_mut() {
         map.retain(|_, v| !v.is_null());
     }
-    Ok(value)
+    Ok(serde_json::to_vec(&value)?)
 }
 
 fn metadata(name: &str, pairs: &[(&str, String)]) -> Metadata {
@@ -267,7 +272,7 @@ impl Observer for McapObserver {
     }
 
     fn observe_sample(&mut self, sample: &Sample) -> anyhow::Result<()> {
-        let data = serde_json::to_vec(&state_message(sample)?)?;
+        let data = state_message(sample)?;
         self.write(Channel::State, sample.t_s, &data)
     }
 
