@@ -276,6 +276,10 @@ impl Observer for McapObserver {
         self.write(Channel::State, sample.t_s, &data)
     }
 
+    fn wants_frames(&self) -> bool {
+        true
+    }
+
     fn observe_frame(&mut self, frame: &Frame) -> anyhow::Result<()> {
         let Some(open) = self.state.as_mut() else {
             return Ok(());

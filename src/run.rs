@@ -172,8 +172,13 @@ pub trait Observer {
     fn observe_sample(&mut self, sample: &Sample) -> anyhow::Result<()>;
     /// Called once with the final report.
     fn observe_final(&mut self, report: &RunReport) -> anyhow::Result<()>;
+    /// Whether this observer draws frames; frames are built only if one does (default:
+    /// no).
+    fn wants_frames(&self) -> bool {
+        false
+    }
     /// Called `output.scene_rate_hz` times per simulated second with the geometry, and
-    /// at the first and last step (default: ignored).
+    /// at the first and last step, if [`Observer::wants_frames`] (default: ignored).
     fn observe_frame(&mut self, _frame: &Frame) -> anyhow::Result<()> {
         Ok(())
     }
@@ -272,7 +277,8 @@ pub fn run_until(
     let mut wall_rolling = None;
     let mut max_gap: f64 = 0.0;
     let mut max_pen: f64 = 0.0;
-    let frame_interval = if scene.scene_rate_hz > 0.0 {
+    let frame_interval = if scene.scene_rate_hz > 0.0 && observers.iter().any(|o| o.wants_frames())
+    {
         1.0 / scene.scene_rate_hz
     } else {
         f64::INFINITY
