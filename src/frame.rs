@@ -8,7 +8,6 @@ use std::f64::consts::PI;
 use serde::Serialize;
 
 use crate::reference::{Continuum, ExactGeometry};
-use crate::spiral::rotate;
 
 /// The coil of eq. (7) drawn as a disc: eq. (7) knows only its radius and its contact
 /// position, and rolling without slip fixes its rotation.
@@ -56,17 +55,18 @@ impl GhostSpiral {
         t_s: f64,
         points_per_turn: u32,
     ) -> Option<Self> {
-        let s = exact.state_at_time(t_s)?;
+        let psi = exact.psi_at_time(t_s)?;
         let spiral = exact.spiral();
-        let psi = exact.psi_at_fraction(s.laid_fraction);
         let rotation = spiral.rotation_with_bottom_at(psi);
-        let low = rotate(spiral.point(psi), rotation);
-        let contact = [s.x_m, 0.5 * thickness_m];
+        let (sin, cos) = rotation.sin_cos();
+        let turn = |v: [f64; 2]| [cos * v[0] - sin * v[1], sin * v[0] + cos * v[1]];
+        let low = turn(spiral.point(psi));
+        let contact = [spiral.arc(psi, spiral.psi_out), 0.5 * thickness_m];
         let step = 2.0 * PI / f64::from(points_per_turn.max(3));
         let mut points = Vec::new();
         let mut q = psi;
         loop {
-            let p = rotate(spiral.point(q), rotation);
+            let p = turn(spiral.point(q));
             points.push([contact[0] + p[0] - low[0], contact[1] + p[1] - low[1]]);
             if q <= spiral.psi_in {
                 break;
