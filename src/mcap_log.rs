@@ -200,6 +200,9 @@ impl Observer for McapObserver {
             // zstd's fastest level: on the yoga mat it writes a smaller file than the
             // default level and costs a third less time (tools/mcap_cost.sh).
             .compression_level(1)
+            // Compress on the run's thread: zstd's worker threads made no measurable
+            // difference on 2 cores (tools/mcap_cost.sh), and spawn none this way.
+            .compression_threads(0)
             .library(format!("uncoil {version}"))
             .create(BufWriter::new(file))?;
         writer.write_metadata(&metadata(
