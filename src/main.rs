@@ -1,13 +1,17 @@
-//! The `uncoil` command line: `uncoil run SCENE [--out DIR] [--set KEY=VALUE]...`,
-//! `uncoil check`, `uncoil compare`, `uncoil sweep`, `uncoil sweep-report`, `uncoil plot`.
+//! The `uncoil` command line: `uncoil run SCENE [--out DIR] [--set KEY=VALUE]... [--no-mcap]`,
+//! `uncoil inspect RUN.mcap`, `uncoil check`, `uncoil compare`, `uncoil sweep`,
+//! `uncoil sweep-report`, `uncoil plot`.
 //!
 //! Results go to stdout, diagnostics to stderr. Exit codes: 0 success, 1 a failure during
-//! the run (e.g. an output file could not be written), 2 bad input (scene or usage), 3 a
-//! guard stopped the run (a blow-up: its reason is on stderr and in `report.json`, and the
-//! outputs hold everything logged up to the stop).
+//! the run (e.g. an output file could not be written) or an unreadable MCAP file, 2 bad input
+//! (scene or usage), 3 a guard stopped the run (a blow-up: its reason is on stderr and in
+//! `report.json`, and the outputs hold everything logged up to the stop), 130 a run stopped
+//! by Ctrl-C (its outputs are complete up to there).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::Context as _;
 use clap::{Parser, Subcommand};
@@ -15,9 +19,10 @@ use clap::{Parser, Subcommand};
 use uncoil::check;
 use uncoil::compare::{SampleLog, table};
 use uncoil::guard::Status;
+use uncoil::mcap_log::McapObserver;
 use uncoil::output::{CsvObserver, ReportObserver, summary};
 use uncoil::overrides::{Override, scene_file_with_overrides};
-use uncoil::run::{Observer, run};
+use uncoil::run::{Observer, run, run_until};
 use uncoil::scene::Scene;
 
 #[derive(Parser)]
@@ -43,6 +48,14 @@ enum Command {
         /// Override a scene value, e.g. `--set discretisation.links_per_turn=64` (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<Override>,
+        /// Do not write run.mcap.
+        #[arg(long)]
+        no_mcap: bool,
+    },
+    /// Read a run's MCAP log back: channels, message counts, time range, metadata, ledger.
+    Inspect {
+        /// The MCAP file, e.g. runs/yoga-mat/run.mcap.
+        file: PathBuf,
     },
     /// Run a scene over the product grid of the varied keys, one row per run in sweep.csv.
     Sweep(sweep_cmd::SweepArgs),
@@ -91,7 +104,22 @@ fn main() -> ExitCode {
                 ExitCode::from(1)
             }
         },
-        Command::Run { scene, out, set } => {
+        Command::Inspect { file } => match uncoil::inspect::read_inventory(&file) {
+            Ok(inv) => {
+                print!("{}", uncoil::inspect::describe(&file, &inv));
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::from(1)
+            }
+        },
+        Command::Run {
+            scene,
+            out,
+            set,
+            no_mcap,
+        } => {
             let scene = match scene_file_with_overrides(&scene, &set) {
                 Ok(s) => s,
                 Err(e) => {
@@ -99,7 +127,24 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             };
-            match run_scene(&scene, out) {
+            let stop = Arc::new(AtomicBool::new(false));
+            let flag = Arc::clone(&stop);
+            // The first Ctrl-C asks the run to stop and finish its files; a second one ends
+            // the process at once.
+            let handler = ctrlc::set_handler(move || {
+                if flag.swap(true, Ordering::SeqCst) {
+                    std::process::exit(130);
+                }
+            });
+            if let Err(e) = handler {
+                eprintln!("warning: Ctrl-C will not finish the files: {e}");
+            }
+            match run_scene(&scene, out, !no_mcap, &stop) {
+                Ok((text, _, _)) if stop.load(Ordering::SeqCst) => {
+                    print!("{text}");
+                    eprintln!("interrupted: the outputs end at the last step taken");
+                    ExitCode::from(130)
+                }
                 Ok((text, Status::Completed, _)) => {
                     print!("{text}");
                     ExitCode::SUCCESS
@@ -176,14 +221,27 @@ fn compare(paths: &[PathBuf]) -> ExitCode {
 }
 
 /// Runs `scene` into its output folder; returns the summary, the status and the stop reason.
-fn run_scene(scene: &Scene, out: Option<PathBuf>) -> anyhow::Result<(String, Status, String)> {
+fn run_scene(
+    scene: &Scene,
+    out: Option<PathBuf>,
+    mcap: bool,
+    stop: &AtomicBool,
+) -> anyhow::Result<(String, Status, String)> {
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&scene.name));
     std::fs::create_dir_all(&dir)
         .with_context(|| format!("cannot create output folder {}", dir.display()))?;
     eprintln!("running {} into {} ...", scene.name, dir.display());
     let mut csv = CsvObserver::new(&dir);
     let mut report = ReportObserver::new(&dir);
-    let observers: &mut [&mut dyn Observer] = &mut [&mut csv, &mut report];
-    let report = run(scene, observers)?;
-    Ok((summary(&report, &dir), report.status, report.stop_reason))
+    let mut log = McapObserver::new(&dir);
+    let mut observers: Vec<&mut dyn Observer> = vec![&mut csv, &mut report];
+    if mcap {
+        observers.push(&mut log);
+    }
+    let report = run_until(scene, &mut observers, stop)?;
+    let mut text = summary(&report, &dir);
+    if mcap {
+        text.push_str(&format!("Wrote {}\n", log.path().display()));
+    }
+    Ok((text, report.status, report.stop_reason))
 }

@@ -259,6 +259,9 @@ pub struct Model {
 
     free: VecDeque<FreeLink>,
     frozen_potential_j: f64,
+    /// Near node of each frozen link, from the outer end, and the far node of the last one
+    /// (world frame, m): frozen links have no body left to ask.
+    frozen_nodes: Vec<[f64; 2]>,
 
     ledger: EnergyLedger,
     phase: Phase,
@@ -468,6 +471,7 @@ impl Model {
             psi_low,
             free: VecDeque::new(),
             frozen_potential_j: 0.0,
+            frozen_nodes: Vec::new(),
             ledger: EnergyLedger::default(),
             phase: Phase::Rolling,
             t: 0.0,
@@ -857,6 +861,13 @@ impl Model {
             }
             let kinetic = body.kinetic_energy();
             self.frozen_potential_j += self.potential_of(body);
+            let [near, far] = [half, -half].map(|s| {
+                let p = pose.transform_point(Vector::new(s, 0.0));
+                [p.x, p.y]
+            });
+            // The last entry was the previous frozen link's far node: this link's near node.
+            self.frozen_nodes.pop();
+            self.frozen_nodes.extend([near, far]);
             self.world.remove_body(oldest.body);
             self.free.pop_front();
             if let Some(next) = self.free.front().copied() {
@@ -963,6 +974,46 @@ impl Model {
             dt_s: self.last_dt,
             momentum_kg_m_s: self.momentum(),
         }
+    }
+
+    /// The link nodes in the world frame (m), for drawing: `(off, wound)`. `off` runs from
+    /// the tape's outer end through the frozen and the moving links that left the coil;
+    /// `wound` runs from the coil's outermost attached node inward. Consecutive nodes bound
+    /// one link; either list is empty when it has no link.
+    pub fn link_nodes(&self) -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
+        let mut off = self.frozen_nodes.clone();
+        for (i, link) in self.free.iter().enumerate() {
+            let half = 0.5 * self.links[link.index].length_m;
+            let pose = self.world.bodies[link.body].position();
+            let ends: &[f64] = if i + 1 == self.free.len() {
+                &[half, -half]
+            } else {
+                &[half]
+            };
+            if i == 0 {
+                // The first moving link's near node replaces the last frozen far node.
+                off.pop();
+            }
+            off.extend(ends.iter().map(|&s| {
+                let p = pose.transform_point(Vector::new(s, 0.0));
+                [p.x, p.y]
+            }));
+        }
+        let mut wound = Vec::new();
+        if let Some(coil) = self.coil {
+            let pose = self.world.bodies[coil].position();
+            let attached = &self.links[self.first_attached..];
+            let nodes = attached
+                .first()
+                .map(|l| l.near)
+                .into_iter()
+                .chain(attached.iter().map(|l| l.far));
+            wound.extend(nodes.map(|n| {
+                let p = pose.transform_point(Vector::new(n[0], n[1]));
+                [p.x, p.y]
+            }));
+        }
+        (off, wound)
     }
 
     /// Potential energy of the tape lying flat, midline at `b/2`, from `x = 0` on (J).

@@ -555,6 +555,11 @@ impl ExactGeometry {
         self.traj.q_at(t).map(|psi| self.state_at_psi(psi, t))
     }
 
+    /// The spiral parameter of the lowest point at time `t`, `None` past the tabulated end.
+    pub fn psi_at_time(&self, t: f64) -> Option<f64> {
+        self.traj.q_at(t)
+    }
+
     /// The floor's normal force on the coil (N) that keeps it rolling with the lowest point
     /// at `psi`: `N = m g + d(m y_cm')/dt` (the shed tape leaves at rest and carries no
     /// momentum). The spiral's centre of mass sits about `b / pi` off its axis, but that

@@ -2,11 +2,13 @@
 //! and feeds samples to observers; it builds the [`RunReport`]. It times only the model's
 //! step, and it never names a file format (outputs are [`Observer`]s).
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use serde::Serialize;
 
 use crate::forces::{ForceFn, force_reference};
+use crate::frame::{Event, Frame, GhostDisc, GhostSpiral};
 use crate::guard::{Applicability, Bounds, Guard, ReferenceLimit, Status};
 use crate::model::{EnergyLedger, Model, Observation, Phase};
 use crate::reference::{Continuum, ExactGeometry, ForceTorque, Params};
@@ -200,6 +202,20 @@ pub trait Observer {
     fn observe_sample(&mut self, sample: &Sample) -> anyhow::Result<()>;
     /// Called once with the final report.
     fn observe_final(&mut self, report: &RunReport) -> anyhow::Result<()>;
+    /// Whether this observer draws frames; frames are built only if one does (default:
+    /// no).
+    fn wants_frames(&self) -> bool {
+        false
+    }
+    /// Called `output.scene_rate_hz` times per simulated second with the geometry, and
+    /// at the first and last step, if [`Observer::wants_frames`] (default: ignored).
+    fn observe_frame(&mut self, _frame: &Frame) -> anyhow::Result<()> {
+        Ok(())
+    }
+    /// Called for every event, in time order (default: ignored).
+    fn observe_event(&mut self, _event: &Event) -> anyhow::Result<()> {
+        Ok(())
+    }
 }
 
 /// The analytic references of a scene.
@@ -302,6 +318,16 @@ struct MilestoneHit {
 
 /// Runs a scene to its end and returns the report; every sample goes to the observers.
 pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result<RunReport> {
+    run_until(scene, observers, &AtomicBool::new(false))
+}
+
+/// Like [`run`], but stops early, with every observer finalised, once `stop` is set (e.g.
+/// by a Ctrl-C handler); the flag is polled after every step.
+pub fn run_until(
+    scene: &Scene,
+    observers: &mut [&mut dyn Observer],
+    stop: &AtomicBool,
+) -> anyhow::Result<RunReport> {
     let refs = References::new(scene);
     let mut model = Model::new(scene);
     for o in observers.iter_mut() {
@@ -332,6 +358,30 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
     let mut max_pen: f64 = 0.0;
     // Momentum and time at the last sample, for the force balance over the interval.
     let mut at_last_sample = (model.observe().momentum_kg_m_s, 0.0);
+    let frame_interval = if scene.scene_rate_hz > 0.0 && observers.iter().any(|o| o.wants_frames())
+    {
+        1.0 / scene.scene_rate_hz
+    } else {
+        f64::INFINITY
+    };
+    let mut next_frame = frame_interval;
+    if frame_interval.is_finite() {
+        let frame = make_frame(scene, &model, &refs, 0.0, 0.0);
+        for o in observers.iter_mut() {
+            o.observe_frame(&frame)?;
+        }
+    }
+    if let Some(f) = refs.exact.hop_onset_fraction() {
+        let event = Event::Warning {
+            t_s: 0.0,
+            message: format!(
+                "the exact-geometry model needs a floor that pulls (N < 0) from laid fraction {f:.4} on"
+            ),
+        };
+        for o in observers.iter_mut() {
+            o.observe_event(&event)?;
+        }
+    }
     let stop_reason;
     loop {
         let start = Instant::now();
@@ -357,6 +407,18 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
         }
         max_gap = max_gap.max(obs.max_joint_gap_m);
         max_pen = max_pen.max(obs.max_penetration_m);
+        let mut events = Vec::new();
+        let (detached_before, detach_j_before) =
+            prev.map_or((0, 0.0), |p| (p.detached, p.ledger.detach_j));
+        if obs.detached > detached_before && obs.phase == Phase::Rolling {
+            events.push(Event::Detach {
+                t_s: obs.t_s,
+                first_link: detached_before,
+                links: obs.detached - detached_before,
+                detached: obs.detached,
+                energy_lost_j: obs.ledger.detach_j - detach_j_before,
+            });
+        }
         if let Some(p) = prev {
             if obs.phase == Phase::Rolling && obs.dt_s > 0.0 {
                 xdot = (obs.x_m - p.x_m) / obs.dt_s;
@@ -375,12 +437,49 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
             if p.phase == Phase::Rolling && obs.phase != Phase::Rolling {
                 bang = Some((p.t_s, p));
                 wall_rolling = Some(wall);
+                events.push(Event::BangStart {
+                    t_s: p.t_s,
+                    kinetic_j: p.kinetic_j,
+                    available_j: p.kinetic_j + p.potential_j - model.flat_potential_j(),
+                });
             }
         }
         limits.observe(&obs, &health, xdot);
         let done = obs.phase == Phase::Done;
         let timed_out = obs.t_s >= scene.stop.max_time_s;
-        prev_logged = obs.t_s >= next_sample || done || timed_out || tripped.is_some();
+        let interrupted = stop.load(Ordering::Relaxed);
+        let last_step = done || timed_out || interrupted || tripped.is_some();
+        if done {
+            events.push(Event::BangSettled {
+                t_s: obs.t_s,
+                started_s: bang.map_or(obs.t_s, |(t, _)| t),
+                dissipated_j: obs.ledger.bang_j,
+            });
+        } else if let Some(reason) = &tripped {
+            events.push(Event::Warning {
+                t_s: obs.t_s,
+                message: format!("stopped by a guard: {reason}"),
+            });
+        } else if timed_out {
+            events.push(Event::Warning {
+                t_s: obs.t_s,
+                message: format!(
+                    "stop.max_time_s = {} reached before the bang settled",
+                    scene.stop.max_time_s
+                ),
+            });
+        } else if interrupted {
+            events.push(Event::Warning {
+                t_s: obs.t_s,
+                message: "interrupted: the run stopped early".into(),
+            });
+        }
+        for event in &events {
+            for o in observers.iter_mut() {
+                o.observe_event(event)?;
+            }
+        }
+        prev_logged = obs.t_s >= next_sample || last_step;
         if prev_logged {
             let mut sample = make_sample(&obs, xdot, e0, &refs);
             let (p0, t0) = at_last_sample;
@@ -398,6 +497,13 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
             }
             next_sample = obs.t_s + scene.sample_interval_s;
         }
+        if obs.t_s >= next_frame || (last_step && frame_interval.is_finite()) {
+            let frame = make_frame(scene, &model, &refs, obs.t_s, obs.x_m);
+            for o in observers.iter_mut() {
+                o.observe_frame(&frame)?;
+            }
+            next_frame += frame_interval * ((obs.t_s - next_frame) / frame_interval + 1.0).floor();
+        }
         prev = Some(obs);
         if let Some(reason) = tripped {
             stop_reason = reason;
@@ -410,6 +516,10 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
         }
         if timed_out {
             stop_reason = format!("stop.max_time_s = {} reached", scene.stop.max_time_s);
+            break;
+        }
+        if interrupted {
+            stop_reason = "interrupted".to_string();
             break;
         }
     }
@@ -494,6 +604,28 @@ pub fn run(scene: &Scene, observers: &mut [&mut dyn Observer]) -> anyhow::Result
         o.observe_final(&report)?;
     }
     Ok(report)
+}
+
+/// Points per turn of the exact-geometry ghost spiral.
+const GHOST_POINTS_PER_TURN: u32 = 32;
+
+fn make_frame(
+    scene: &Scene,
+    model: &Model,
+    refs: &References,
+    t_s: f64,
+    contact_x_m: f64,
+) -> Frame {
+    let (off_coil_m, on_coil_m) = model.link_nodes();
+    let b = scene.tape.thickness_m;
+    Frame {
+        t_s,
+        contact_x_m,
+        off_coil_m,
+        on_coil_m,
+        eq7: GhostDisc::at(&refs.continuum, b, t_s),
+        exact: GhostSpiral::at(&refs.exact, b, t_s, GHOST_POINTS_PER_TURN),
+    }
 }
 
 fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &References) -> Sample {

@@ -40,6 +40,9 @@ const DEFAULT_MAX_TIME_S: f64 = 60.0;
 const DEFAULT_SETTLE_TIME_S: f64 = 0.05;
 /// Default `output.sample_interval_s`.
 const DEFAULT_SAMPLE_INTERVAL_S: f64 = 0.001;
+/// Default `output.scene_rate_hz`: 100 drawings per simulated second, enough to watch the
+/// final bang (0.05 s) over a few frames.
+const DEFAULT_SCENE_RATE_HZ: f64 = 100.0;
 
 /// Bounds of `discretisation.links_per_turn`.
 const LINKS_PER_TURN_RANGE: std::ops::RangeInclusive<i64> = 3..=4096;
@@ -195,6 +198,9 @@ pub struct Scene {
     pub stop: Stop,
     /// Time between rows of `samples.csv`, s; 0 samples every step (default: 0.001).
     pub sample_interval_s: f64,
+    /// Drawings of the scene (links and ghost coils) per simulated second, Hz; 0 draws
+    /// none (default: 100.0). Samples are not affected.
+    pub scene_rate_hz: f64,
     /// The TOML text as read, for logging.
     pub source_text: String,
 }
@@ -359,12 +365,14 @@ struct AxisFile {
 #[serde(deny_unknown_fields, default)]
 struct OutputFile {
     sample_interval_s: f64,
+    scene_rate_hz: f64,
 }
 
 impl Default for OutputFile {
     fn default() -> Self {
         Self {
             sample_interval_s: DEFAULT_SAMPLE_INTERVAL_S,
+            scene_rate_hz: DEFAULT_SCENE_RATE_HZ,
         }
     }
 }
@@ -667,6 +675,12 @@ impl Scene {
             file.output.sample_interval_s >= 0.0,
             "must be >= 0",
         )?;
+        let scene_rate_hz = check(
+            "output.scene_rate_hz",
+            file.output.scene_rate_hz,
+            file.output.scene_rate_hz >= 0.0,
+            "must be >= 0",
+        )?;
 
         Ok(Scene {
             name,
@@ -682,6 +696,7 @@ impl Scene {
             contact_model,
             stop,
             sample_interval_s,
+            scene_rate_hz,
             source_text: text.to_owned(),
         })
     }
@@ -776,6 +791,7 @@ contact_speed_m_s = 0.3
         assert_eq!(s.contact_model, ContactModel::Spiral);
         assert_relative_eq!(s.stop.bang_radius_m, 0.005);
         assert_relative_eq!(s.stop.max_time_s, 60.0);
+        assert_relative_eq!(s.scene_rate_hz, 100.0);
         assert_relative_eq!(s.stop.settle_time_s, 0.05);
         assert_relative_eq!(s.sample_interval_s, 0.001);
         assert!(s.source_text.contains("[tape]"));
@@ -942,6 +958,7 @@ contact_speed_m_s = 0.3
             ("stop", "max_time_s"),
             ("stop", "settle_time_s"),
             ("output", "sample_interval_s"),
+            ("output", "scene_rate_hz"),
         ] {
             let msg = rejects(section, key, "nan");
             assert_eq!(msg, format!("{section}.{key} = NaN: must be finite"));
@@ -998,6 +1015,7 @@ contact_speed_m_s = 0.3
             ("tape", "mass_kg", "1e7"),
             ("solver", "steps_per_link", "1001"),
             ("stop", "max_time_s", "1e5"),
+            ("output", "scene_rate_hz", "-1.0"),
         ] {
             let msg = rejects(section, key, bad);
             assert!(msg.contains(": must") || msg.contains(": a link"), "{msg}");
@@ -1022,6 +1040,7 @@ contact_speed_m_s = 0.3
             ("solver", "freeze_speed_m_s", "0.0"),
             ("stop", "settle_time_s", "0.0"),
             ("output", "sample_interval_s", "0.0"),
+            ("output", "scene_rate_hz", "0.0"),
         ] {
             // core_radius_m = R - 2b leaves no room for the default bang radius: set it.
             let text = if key == "core_radius_m" {

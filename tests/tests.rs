@@ -3,6 +3,7 @@
 mod cli;
 mod fuzz;
 mod hard;
+mod mcap;
 mod sim;
 mod sweep;
 mod variants;

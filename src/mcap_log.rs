@@ -1,0 +1,869 @@
+//! `run.mcap`: every run as an MCAP log that Foxglove (or Lichtblick) opens as it is. It
+//! turns samples, frames and events into JSON messages stamped with simulation time; it does
+//! no physics and reads nothing back (see [`crate::inspect`]).
+//!
+//! Channels, all JSON-encoded with a `jsonschema` schema:
+//! - `/scene`: `foxglove.SceneUpdate`, schema text vendored unchanged from the npm package
+//!   `@foxglove/schemas` 2.1.0 (`schemas/foxglove/`). Entities in frame `world`, metres,
+//!   x along the floor and y up: `floor` (a cube under `y = 0`), `tape/off_coil` and
+//!   `tape/on_coil` (one line strip each, through the link nodes, as thick as the tape),
+//!   `ghost/eq7` (the coil of eq. 7: a circle with a spoke showing its rotation) and
+//!   `ghost/exact` (the exact-geometry model's wound spiral), each in its own colour. Every
+//!   message carries every entity, so a seek redraws the whole scene from one message; a
+//!   ghost past its reference's end is deleted. Coordinates are rounded to 1 µm; the tape
+//!   off the coil keeps only the nodes that stand out by more than b/20 from a straight run
+//!   (the flat laid tape becomes a few segments), and a line has at most 2048 points (a
+//!   thin tape's thousands of wound links are then drawn through every k-th node).
+//! - `/state`: one message per sample with the fields of `samples.csv` (schema
+//!   `uncoil.State`, `schemas/uncoil.State.json`); a reference past its end is left out.
+//! - `/events`: detaches (one message per step that shed links, normally one link), the
+//!   start and the end of the final bang with its energies, warnings (schema `uncoil.Event`).
+//! - `/tf`: `foxglove.FrameTransforms` (official schema, vendored likewise), one with each
+//!   drawing: the frame `contact` at the simulation's contact line on the floor, so that a
+//!   3D view following it keeps the coil in sight along the 2 m of a yoga mat.
+//!
+//! Metadata records: `scene` (name, file text), `tool` (name, version), `resolution`,
+//! `solver`, and at the end `run` (stop reason, steps, times) and `ledger`.
+//!
+//! The file is written as `run.mcap.partial` and renamed when finished, so a file named
+//! `run.mcap` is always complete. Messages go into zstd-compressed chunks of about 1 MiB;
+//! the writer finishes a chunk by seeking back to its header, which flushes it to the file,
+//! so a crash (even a `kill -9`) leaves every completed chunk readable in the `.partial`
+//! file (`mcap recover`, or [`crate::inspect`], which reads as far as the data goes).
+
+use std::collections::BTreeMap;
+use std::fs::{self, File};
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+use mcap::records::{MessageHeader, Metadata};
+use mcap::{Compression, WriteOptions, Writer};
+use serde::Serialize;
+
+use crate::frame::{Event, Frame};
+use crate::run::{Observer, RunReport, Sample};
+use crate::scene::Scene;
+
+/// The official `foxglove.SceneUpdate` JSON schema (npm `@foxglove/schemas` 2.1.0).
+pub const SCENE_UPDATE_SCHEMA: &str = include_str!("../schemas/foxglove/SceneUpdate.json");
+/// The official `foxglove.FrameTransforms` JSON schema (npm `@foxglove/schemas` 2.1.0).
+pub const FRAME_TRANSFORMS_SCHEMA: &str = include_str!("../schemas/foxglove/FrameTransforms.json");
+/// The JSON schema of `/state` messages.
+pub const STATE_SCHEMA: &str = include_str!("../schemas/uncoil.State.json");
+/// The JSON schema of `/events` messages.
+pub const EVENT_SCHEMA: &str = include_str!("../schemas/uncoil.Event.json");
+
+/// Topic of the scene drawings.
+pub const SCENE_TOPIC: &str = "/scene";
+/// Topic of the samples.
+pub const STATE_TOPIC: &str = "/state";
+/// Topic of the events.
+pub const EVENTS_TOPIC: &str = "/events";
+/// Topic of the frame transforms.
+pub const TF_TOPIC: &str = "/tf";
+
+/// Target uncompressed size of a chunk (bytes): the unit that survives a crash.
+const CHUNK_SIZE: u64 = 1024 * 1024;
+
+/// Simulation time in nanoseconds, the MCAP log and publish time.
+fn stamp_ns(t_s: f64) -> u64 {
+    // Times are >= 0 and far below 2^64 ns (584 years).
+    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+    let ns = (t_s.max(0.0) * 1e9).round() as u64;
+    ns
+}
+
+/// Writes `dir/run.mcap`.
+pub struct McapObserver {
+    path: PathBuf,
+    state: Option<Open>,
+}
+
+/// The channels, in the order of `Open::channels`.
+#[derive(Clone, Copy)]
+enum Channel {
+    Scene,
+    State,
+    Events,
+    Tf,
+}
+
+struct Open {
+    writer: Writer<BufWriter<File>>,
+    /// MCAP channel ids, indexed by [`Channel`].
+    channels: [u16; 4],
+    /// Next sequence number of each channel.
+    sequence: [u32; 4],
+    painter: Painter,
+}
+
+impl McapObserver {
+    /// An observer writing `dir/run.mcap`.
+    pub fn new(dir: &Path) -> Self {
+        Self {
+            path: dir.join("run.mcap"),
+            state: None,
+        }
+    }
+
+    /// Where the finished file goes.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn partial(&self) -> PathBuf {
+        let mut name = self.path.file_name().unwrap_or_default().to_os_string();
+        name.push(".partial");
+        self.path.with_file_name(name)
+    }
+
+    fn write(&mut self, channel: Channel, t_s: f64, data: &[u8]) -> anyhow::Result<()> {
+        let Some(open) = self.state.as_mut() else {
+            return Ok(());
+        };
+        let which = channel as usize;
+        let channel_id = open.channels[which];
+        let sequence = open.sequence[which];
+        open.sequence[which] += 1;
+        let ns = stamp_ns(t_s);
+        open.writer.write_to_known_channel(
+            &MessageHeader {
+                channel_id,
+                sequence,
+                log_time: ns,
+                publish_time: ns,
+            },
+            data,
+        )?;
+        Ok(())
+    }
+}
+
+/// A sample as a `/state` message: a quantity that does not exist (a reference past its
+/// end, `NaN` in the sample, an empty CSV cell) is left out rather than written as `null`,
+/// which Foxglove Studio's JSON-schema reader does not accept as a number type.
+fn state_message(sample: &Sample) -> anyhow::Result<Vec<u8>> {
+    let data = serde_json::to_vec(sample)?;
+    // The common case, every quantity present, is written directly.
+    if !data.windows(4).any(|w| w == b"null") {
+        return Ok(data);
+    }
+    let mut value = serde_json::to_value(sample)?;
+    if let Some(map) = value.as_object_mut() {
+        map.retain(|_, v| !v.is_null());
+    }
+    Ok(serde_json::to_vec(&value)?)
+}
+
+fn metadata(name: &str, pairs: &[(&str, String)]) -> Metadata {
+    Metadata {
+        name: name.into(),
+        metadata: pairs
+            .iter()
+            .map(|(k, v)| ((*k).to_owned(), v.clone()))
+            .collect(),
+    }
+}
+
+/// Flattens a JSON object into `a.b = value` strings, for MCAP metadata.
+fn flatten(prefix: &str, value: &serde_json::Value, out: &mut BTreeMap<String, String>) {
+    match value {
+        serde_json::Value::Object(map) => {
+            for (k, v) in map {
+                let key = if prefix.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{prefix}.{k}")
+                };
+                flatten(&key, v, out);
+            }
+        }
+        serde_json::Value::String(s) => {
+            out.insert(prefix.to_owned(), s.clone());
+        }
+        other => {
+            out.insert(prefix.to_owned(), other.to_string());
+        }
+    }
+}
+
+impl Observer for McapObserver {
+    fn observe_init(&mut self, scene: &Scene) -> anyhow::Result<()> {
+        let tmp = self.partial();
+        let file =
+            File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
+        let version = env!("CARGO_PKG_VERSION");
+        let mut writer = WriteOptions::new()
+            .compression(Some(Compression::Zstd))
+            .chunk_size(Some(CHUNK_SIZE))
+            // zstd's fastest level: on the yoga mat it writes a smaller file than the
+            // default level and costs a third less time (tools/mcap_cost.sh).
+            .compression_level(1)
+            // Compress on the run's thread: zstd's worker threads made no measurable
+            // difference on 2 cores (tools/mcap_cost.sh), and spawn none this way.
+            .compression_threads(0)
+            .library(format!("uncoil {version}"))
+            .create(BufWriter::new(file))?;
+        writer.write_metadata(&metadata(
+            "scene",
+            &[
+                ("name", scene.name.clone()),
+                ("text", scene.source_text.clone()),
+            ],
+        ))?;
+        writer.write_metadata(&metadata(
+            "tool",
+            &[("name", "uncoil".into()), ("version", version.into())],
+        ))?;
+        writer.write_metadata(&metadata(
+            "resolution",
+            &[
+                ("links_per_turn", scene.links_per_turn.to_string()),
+                ("sample_interval_s", scene.sample_interval_s.to_string()),
+                ("scene_rate_hz", scene.scene_rate_hz.to_string()),
+            ],
+        ))?;
+        let s = &scene.solver;
+        writer.write_metadata(&metadata(
+            "solver",
+            &[
+                ("engine", "rapier2d-f64 0.36".into()),
+                ("max_dt_s", s.max_dt_s.to_string()),
+                ("steps_per_link", s.steps_per_link.to_string()),
+                ("iterations", s.iterations.to_string()),
+                ("freeze_speed_m_s", s.freeze_speed_m_s.to_string()),
+                (
+                    "contact_model",
+                    serde_json::to_value(scene.contact_model)?
+                        .as_str()
+                        .unwrap_or_default()
+                        .to_owned(),
+                ),
+            ],
+        ))?;
+        // Schemas and channels go into the first chunk, beside the first messages: written
+        // before the metadata, they would fill a chunk of their own, without messages and
+        // so without message indexes, which Foxglove Studio refuses to read.
+        let no_meta = BTreeMap::new();
+        let scene_schema = writer.add_schema(
+            "foxglove.SceneUpdate",
+            "jsonschema",
+            SCENE_UPDATE_SCHEMA.as_bytes(),
+        )?;
+        let state_schema =
+            writer.add_schema("uncoil.State", "jsonschema", STATE_SCHEMA.as_bytes())?;
+        let event_schema =
+            writer.add_schema("uncoil.Event", "jsonschema", EVENT_SCHEMA.as_bytes())?;
+        let tf_schema = writer.add_schema(
+            "foxglove.FrameTransforms",
+            "jsonschema",
+            FRAME_TRANSFORMS_SCHEMA.as_bytes(),
+        )?;
+        let scene_ch = writer.add_channel(scene_schema, SCENE_TOPIC, "json", &no_meta)?;
+        let state_ch = writer.add_channel(state_schema, STATE_TOPIC, "json", &no_meta)?;
+        let events_ch = writer.add_channel(event_schema, EVENTS_TOPIC, "json", &no_meta)?;
+        let tf_ch = writer.add_channel(tf_schema, TF_TOPIC, "json", &no_meta)?;
+
+        self.state = Some(Open {
+            writer,
+            channels: [scene_ch, state_ch, events_ch, tf_ch],
+            sequence: [0; 4],
+            painter: Painter::new(scene),
+        });
+        Ok(())
+    }
+
+    fn observe_sample(&mut self, sample: &Sample) -> anyhow::Result<()> {
+        let data = state_message(sample)?;
+        self.write(Channel::State, sample.t_s, &data)
+    }
+
+    fn wants_frames(&self) -> bool {
+        true
+    }
+
+    fn observe_frame(&mut self, frame: &Frame) -> anyhow::Result<()> {
+        let Some(open) = self.state.as_mut() else {
+            return Ok(());
+        };
+        let data = serde_json::to_vec(&open.painter.paint(frame))?;
+        let tf = serde_json::to_vec(&contact_transform(frame))?;
+        self.write(Channel::Scene, frame.t_s, &data)?;
+        self.write(Channel::Tf, frame.t_s, &tf)
+    }
+
+    fn observe_event(&mut self, event: &Event) -> anyhow::Result<()> {
+        let data = serde_json::to_vec(event)?;
+        self.write(Channel::Events, event.t_s(), &data)
+    }
+
+    fn observe_final(&mut self, report: &RunReport) -> anyhow::Result<()> {
+        let Some(mut open) = self.state.take() else {
+            return Ok(());
+        };
+        open.writer.write_metadata(&metadata(
+            "run",
+            &[
+                ("stop_reason", report.stop_reason.clone()),
+                ("links", report.links.to_string()),
+                ("steps", report.steps.to_string()),
+                ("sim_time_s", report.sim_time_s.to_string()),
+                ("wall_time_s", report.wall_time_s.to_string()),
+            ],
+        ))?;
+        let mut ledger = BTreeMap::new();
+        flatten("", &serde_json::to_value(report.ledger)?, &mut ledger);
+        open.writer.write_metadata(&Metadata {
+            name: "ledger".into(),
+            metadata: ledger,
+        })?;
+        open.writer.finish()?;
+        let mut out = open.writer.into_inner();
+        std::io::Write::flush(&mut out)?;
+        drop(out);
+        fs::rename(self.partial(), &self.path)
+            .with_context(|| format!("cannot rename to {}", self.path.display()))?;
+        Ok(())
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// foxglove.SceneUpdate, the parts used here. Field names and required fields follow the
+// vendored schema; `tests` validates a painted frame's shape against it.
+
+#[derive(Serialize)]
+struct Time {
+    sec: u32,
+    nsec: u32,
+}
+
+impl Time {
+    fn at(t_s: f64) -> Self {
+        let ns = stamp_ns(t_s);
+        // A run of more than 136 years is not simulated.
+        #[allow(clippy::cast_possible_truncation)]
+        Self {
+            sec: (ns / 1_000_000_000) as u32,
+            nsec: (ns % 1_000_000_000) as u32,
+        }
+    }
+}
+
+#[derive(Serialize, Clone, Copy)]
+struct Vector3 {
+    x: f64,
+    y: f64,
+    z: f64,
+}
+
+#[derive(Serialize, Clone, Copy)]
+struct Quaternion {
+    x: f64,
+    y: f64,
+    z: f64,
+    w: f64,
+}
+
+#[derive(Serialize, Clone, Copy)]
+struct Pose {
+    position: Vector3,
+    orientation: Quaternion,
+}
+
+impl Pose {
+    fn at(x: f64, y: f64) -> Self {
+        Self {
+            position: Vector3 { x, y, z: 0.0 },
+            orientation: Quaternion {
+                x: 0.0,
+                y: 0.0,
+                z: 0.0,
+                w: 1.0,
+            },
+        }
+    }
+}
+
+#[derive(Serialize, Clone, Copy)]
+struct Color {
+    r: f64,
+    g: f64,
+    b: f64,
+    a: f64,
+}
+
+const fn rgb(r: f64, g: f64, b: f64) -> Color {
+    Color { r, g, b, a: 1.0 }
+}
+
+/// Floor: light grey. Tape: dark blue off the coil, lighter on it. Eq. (7): orange.
+/// Exact geometry: green.
+const FLOOR: Color = rgb(0.75, 0.75, 0.75);
+const TAPE_OFF: Color = rgb(0.10, 0.25, 0.60);
+const TAPE_ON: Color = rgb(0.25, 0.55, 0.95);
+const EQ7: Color = rgb(0.95, 0.50, 0.05);
+const EXACT: Color = rgb(0.10, 0.70, 0.25);
+
+#[derive(Serialize)]
+struct CubePrimitive {
+    pose: Pose,
+    size: Vector3,
+    color: Color,
+}
+
+#[derive(Serialize)]
+struct LinePrimitive {
+    /// 0 line strip, 1 line loop, 2 line list.
+    #[serde(rename = "type")]
+    kind: u8,
+    pose: Pose,
+    thickness: f64,
+    scale_invariant: bool,
+    points: Vec<Vector3>,
+    color: Color,
+    colors: [Color; 0],
+    indices: [u32; 0],
+}
+
+const LINE_STRIP: u8 = 0;
+const LINE_LOOP: u8 = 1;
+const LINE_LIST: u8 = 2;
+
+#[derive(Serialize)]
+struct KeyValuePair {
+    key: &'static str,
+    value: &'static str,
+}
+
+#[derive(Serialize)]
+struct SceneEntity {
+    timestamp: Time,
+    frame_id: &'static str,
+    id: &'static str,
+    lifetime: Time,
+    frame_locked: bool,
+    metadata: Vec<KeyValuePair>,
+    arrows: [(); 0],
+    cubes: Vec<CubePrimitive>,
+    spheres: [(); 0],
+    cylinders: [(); 0],
+    lines: Vec<LinePrimitive>,
+    triangles: [(); 0],
+    texts: [(); 0],
+    models: [(); 0],
+}
+
+#[derive(Serialize)]
+struct SceneEntityDeletion {
+    timestamp: Time,
+    /// 0: the entity with this id.
+    #[serde(rename = "type")]
+    kind: u8,
+    id: &'static str,
+}
+
+#[derive(Serialize)]
+struct FrameTransform {
+    timestamp: Time,
+    parent_frame_id: &'static str,
+    child_frame_id: &'static str,
+    translation: Vector3,
+    rotation: Quaternion,
+}
+
+#[derive(Serialize)]
+struct FrameTransforms {
+    transforms: [FrameTransform; 1],
+}
+
+/// The frame `contact`: the simulation's contact line on the floor, unrotated.
+fn contact_transform(frame: &Frame) -> FrameTransforms {
+    let pose = Pose::at(um(frame.contact_x_m), 0.0);
+    FrameTransforms {
+        transforms: [FrameTransform {
+            timestamp: Time::at(frame.t_s),
+            parent_frame_id: "world",
+            child_frame_id: "contact",
+            translation: pose.position,
+            rotation: pose.orientation,
+        }],
+    }
+}
+
+#[derive(Serialize)]
+struct SceneUpdate {
+    deletions: Vec<SceneEntityDeletion>,
+    entities: Vec<SceneEntity>,
+}
+
+/// Rounds a coordinate to 1 µm: far below what a drawing shows, and it halves the text.
+fn um(v: f64) -> f64 {
+    (v * 1e6).round() / 1e6
+}
+
+/// Most points drawn for one line: a longer line (the wound part of a thin tape, thousands
+/// of links) is drawn through every k-th node, its ends kept. A drawing only.
+const MAX_LINE_POINTS: usize = 2048;
+
+/// The points of a line strip as drawn: with a tolerance, the nodes that Douglas-Peucker
+/// simplification keeps (the flat laid tape becomes a few segments); then at most
+/// [`MAX_LINE_POINTS`] of them. A curve of many turns (the wound coil) is not simplified:
+/// Douglas-Peucker splits a spiral unevenly and costs O(n^2) on it.
+fn drawn(nodes: &[[f64; 2]], tol_m: Option<f64>) -> Vec<Vector3> {
+    let n = nodes.len();
+    let mut keep = vec![tol_m.is_none(); n];
+    if n > 0 {
+        keep[0] = true;
+        keep[n - 1] = true;
+    }
+    let tol_m = tol_m.unwrap_or(f64::INFINITY);
+    let mut stack = if tol_m.is_finite() {
+        vec![(0, n.saturating_sub(1))]
+    } else {
+        vec![]
+    };
+    while let Some((i, j)) = stack.pop() {
+        let far = (i + 1..j)
+            .map(|k| (k, distance_to_segment(nodes[k], nodes[i], nodes[j])))
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((k, d)) = far
+            && d > tol_m
+        {
+            keep[k] = true;
+            stack.push((i, k));
+            stack.push((k, j));
+        }
+    }
+    let kept: Vec<[f64; 2]> = nodes
+        .iter()
+        .zip(&keep)
+        .filter(|(_, k)| **k)
+        .map(|(p, _)| *p)
+        .collect();
+    let step = kept.len().div_ceil(MAX_LINE_POINTS).max(1);
+    let last = kept.len().saturating_sub(1);
+    kept.iter()
+        .enumerate()
+        .filter(|(i, _)| i % step == 0 || *i == last)
+        .map(|(_, &p)| point(p))
+        .collect()
+}
+
+/// Distance of `p` from the segment from `a` to `b` (m).
+fn distance_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let s = if len2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - s * dx).hypot(p[1] - a[1] - s * dy)
+}
+
+fn point(p: [f64; 2]) -> Vector3 {
+    Vector3 {
+        x: um(p[0]),
+        y: um(p[1]),
+        z: 0.0,
+    }
+}
+
+/// Turns frames into scene updates.
+struct Painter {
+    thickness_m: f64,
+    floor_from_m: f64,
+    floor_to_m: f64,
+}
+
+/// Segments of the eq. (7) circle.
+const CIRCLE_SEGMENTS: u32 = 48;
+
+impl Painter {
+    fn new(scene: &Scene) -> Self {
+        let spiral = crate::spiral::Spiral::wound(
+            scene.tape.outer_radius_m,
+            scene.tape.thickness_m,
+            scene.tape.core_radius_m,
+        );
+        let r = scene.tape.outer_radius_m;
+        Self {
+            thickness_m: scene.tape.thickness_m,
+            floor_from_m: -2.0 * r,
+            floor_to_m: spiral.length() + 2.0 * r,
+        }
+    }
+
+    fn entity(t_s: f64, id: &'static str, label: &'static str) -> SceneEntity {
+        SceneEntity {
+            timestamp: Time::at(t_s),
+            frame_id: "world",
+            id,
+            lifetime: Time { sec: 0, nsec: 0 },
+            frame_locked: false,
+            metadata: vec![KeyValuePair {
+                key: "label",
+                value: label,
+            }],
+            arrows: [],
+            cubes: vec![],
+            spheres: [],
+            cylinders: [],
+            lines: vec![],
+            triangles: [],
+            texts: [],
+            models: [],
+        }
+    }
+
+    fn line(kind: u8, thickness: f64, color: Color, points: Vec<Vector3>) -> LinePrimitive {
+        LinePrimitive {
+            kind,
+            pose: Pose::at(0.0, 0.0),
+            thickness,
+            scale_invariant: false,
+            points,
+            color,
+            colors: [],
+            indices: [],
+        }
+    }
+
+    fn paint(&self, frame: &Frame) -> SceneUpdate {
+        let t = frame.t_s;
+        let b = self.thickness_m;
+        let ghost = 0.25 * b;
+        // Drawing tolerance: a twentieth of the tape's thickness, the width of its line.
+        let tol = 0.05 * b;
+        let mut entities = Vec::with_capacity(5);
+        let mut deletions = Vec::new();
+
+        let mut floor = Self::entity(t, "floor", "floor, top at y = 0");
+        let depth = 10.0 * b;
+        floor.cubes.push(CubePrimitive {
+            pose: Pose::at(
+                um(0.5 * (self.floor_from_m + self.floor_to_m)),
+                um(-0.5 * depth),
+            ),
+            size: Vector3 {
+                x: um(self.floor_to_m - self.floor_from_m),
+                y: um(depth),
+                z: um(depth),
+            },
+            color: FLOOR,
+        });
+        entities.push(floor);
+
+        for (id, label, nodes, color, tol) in [
+            (
+                "tape/off_coil",
+                "simulated tape off the coil",
+                &frame.off_coil_m,
+                TAPE_OFF,
+                Some(tol),
+            ),
+            (
+                "tape/on_coil",
+                "simulated tape on the coil",
+                &frame.on_coil_m,
+                TAPE_ON,
+                None,
+            ),
+        ] {
+            let mut e = Self::entity(t, id, label);
+            e.lines
+                .push(Self::line(LINE_STRIP, b, color, drawn(nodes, tol)));
+            entities.push(e);
+        }
+
+        if let Some(d) = &frame.eq7 {
+            let mut e = Self::entity(t, "ghost/eq7", "eq. (7) continuum coil");
+            let c = d.centre_m;
+            let circle = (0..CIRCLE_SEGMENTS)
+                .map(|k| {
+                    let a = 2.0 * std::f64::consts::PI * f64::from(k) / f64::from(CIRCLE_SEGMENTS);
+                    point([c[0] + d.radius_m * a.cos(), c[1] + d.radius_m * a.sin()])
+                })
+                .collect();
+            e.lines.push(Self::line(LINE_LOOP, ghost, EQ7, circle));
+            // The spoke points at the outer end's start position, straight down at t = 0.
+            let a = d.rotation_rad - 0.5 * std::f64::consts::PI;
+            let tip = [c[0] + d.radius_m * a.cos(), c[1] + d.radius_m * a.sin()];
+            e.lines.push(Self::line(
+                LINE_LIST,
+                ghost,
+                EQ7,
+                vec![point(c), point(tip)],
+            ));
+            entities.push(e);
+        } else {
+            deletions.push(SceneEntityDeletion {
+                timestamp: Time::at(t),
+                kind: 0,
+                id: "ghost/eq7",
+            });
+        }
+
+        if let Some(g) = &frame.exact {
+            let mut e = Self::entity(t, "ghost/exact", "exact-geometry coil");
+            e.lines.push(Self::line(
+                LINE_STRIP,
+                ghost,
+                EXACT,
+                drawn(&g.points_m, None),
+            ));
+            entities.push(e);
+        } else {
+            deletions.push(SceneEntityDeletion {
+                timestamp: Time::at(t),
+                kind: 0,
+                id: "ghost/exact",
+            });
+        }
+        SceneUpdate {
+            deletions,
+            entities,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene() -> Scene {
+        Scene::from_toml_str(
+            "[tape]\nouter_radius_m = 0.02\nthickness_m = 0.004\nmass_kg = 0.2\n\
+             [push]\ncontact_speed_m_s = 0.3\n[discretisation]\nlinks_per_turn = 8\n",
+            "small",
+        )
+        .expect("valid scene")
+    }
+
+    #[test]
+    fn schema_properties_are_the_csv_columns_in_order() {
+        let schema: serde_json::Value = serde_json::from_str(STATE_SCHEMA).unwrap();
+        let props: Vec<&str> = schema["properties"]
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(String::as_str)
+            .collect();
+        let mut sorted = crate::output::CSV_COLUMNS.to_vec();
+        sorted.sort_unstable();
+        // serde_json's map is sorted (no preserve_order feature): compare as sets.
+        assert_eq!(props, sorted);
+        // Every simulated quantity is required; a reference may be absent past its end.
+        let required: Vec<&str> = schema["required"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_str().unwrap())
+            .collect();
+        let refs = crate::output::CSV_COLUMNS
+            .iter()
+            .filter(|c| !required.contains(c))
+            .count();
+        assert_eq!(
+            refs, 18,
+            "optional: r_ref..friction_ref, the exact model, r_ft, the valid reference, theta, forces"
+        );
+    }
+
+    #[test]
+    fn vendored_scene_schema_is_foxglove_scene_update() {
+        let schema: serde_json::Value = serde_json::from_str(SCENE_UPDATE_SCHEMA).unwrap();
+        assert_eq!(schema["title"], "foxglove.SceneUpdate");
+    }
+
+    #[test]
+    fn painted_entities_carry_every_required_field() {
+        // The required fields of an entity, from the vendored schema, are all present.
+        let schema: serde_json::Value = serde_json::from_str(SCENE_UPDATE_SCHEMA).unwrap();
+        let entity = &schema["properties"]["entities"]["items"];
+        let painter = Painter::new(&scene());
+        let frame = Frame {
+            t_s: 1.5,
+            contact_x_m: 0.01,
+            off_coil_m: vec![[0.0, 0.002], [0.01, 0.002]],
+            on_coil_m: vec![],
+            eq7: None,
+            exact: None,
+        };
+        let msg = serde_json::to_value(painter.paint(&frame)).unwrap();
+        for e in msg["entities"].as_array().unwrap() {
+            for key in entity["required"].as_array().unwrap() {
+                assert!(
+                    e.get(key.as_str().unwrap()).is_some(),
+                    "entity {} lacks {key}",
+                    e["id"]
+                );
+            }
+            assert_eq!(e["timestamp"]["sec"], 1);
+            assert_eq!(e["timestamp"]["nsec"], 500_000_000);
+        }
+        // Both ghosts are absent: both are deleted.
+        assert_eq!(msg["deletions"].as_array().unwrap().len(), 2);
+    }
+
+    #[test]
+    fn drawing_drops_straight_runs_keeps_bends_and_caps_the_points() {
+        // A flat run, a step up, a flat run: 2 + 2 corners survive, nothing else.
+        let mut nodes: Vec<[f64; 2]> = (0..100).map(|k| [f64::from(k) * 1e-3, 0.0]).collect();
+        nodes.extend((100..200).map(|k| [f64::from(k) * 1e-3, 0.01]));
+        let d = drawn(&nodes, Some(1e-4));
+        let xy: Vec<(f64, f64)> = d.iter().map(|p| (p.x, p.y)).collect();
+        assert_eq!(
+            xy,
+            [(0.0, 0.0), (0.099, 0.0), (0.1, 0.01), (0.199, 0.01)],
+            "kept {xy:?}"
+        );
+        // A circle keeps every node it needs, up to the cap, and both ends.
+        let circle: Vec<[f64; 2]> = (0..=10_000)
+            .map(|k| {
+                let a = f64::from(k) * 2.0 * std::f64::consts::PI / 10_000.0;
+                [a.cos(), a.sin()]
+            })
+            .collect();
+        let d = drawn(&circle, None);
+        assert!(d.len() <= MAX_LINE_POINTS + 1, "{} points", d.len());
+        assert!(d.len() > MAX_LINE_POINTS / 2, "{} points", d.len());
+        assert!((d.last().unwrap().x - 1.0).abs() < 1e-9, "the end is kept");
+    }
+
+    #[test]
+    fn a_crash_leaves_the_completed_chunks_readable() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut mcap = McapObserver::new(dir.path());
+        let s = scene();
+        mcap.observe_init(&s).unwrap();
+        // Enough messages for a few 1 MiB chunks (about 800 bytes each, uncompressed).
+        let n = 5000;
+        for k in 0..n {
+            let t = f64::from(k) * 1e-3;
+            let data = format!("{{\"t_s\":{t},\"pad\":\"{}\"}}", "x".repeat(800));
+            mcap.write(Channel::State, t, data.as_bytes()).unwrap();
+        }
+        // A crash: nothing is flushed or finished, the buffered tail is lost.
+        std::mem::forget(mcap);
+        let bytes = fs::read(dir.path().join("run.mcap.partial")).unwrap();
+        let mut read = 0u32;
+        let mut last = None;
+        for m in mcap::MessageStream::new(&bytes).unwrap() {
+            match m {
+                Ok(m) => {
+                    assert!(last.is_none_or(|t| t <= m.log_time), "time order");
+                    last = Some(m.log_time);
+                    read += 1;
+                }
+                Err(_) => break,
+            }
+        }
+        assert!(
+            read >= 3000 && read < n,
+            "{read} of {n} messages readable after a crash, expected the completed chunks"
+        );
+        assert!(!dir.path().join("run.mcap").exists(), "no finished file");
+    }
+}

@@ -1,0 +1,468 @@
+//! `run.mcap` read back with the `mcap` crate: channels, schemas, message counts, time
+//! order and metadata of a yoga-mat run; `uncoil inspect`; `--no-mcap`; and Ctrl-C, which
+//! must still leave a finished file.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+use assert_cmd::Command;
+use predicates::prelude::*;
+use serde_json::Value;
+use uncoil::mcap_log::{McapObserver, SCENE_UPDATE_SCHEMA};
+use uncoil::output::{CSV_COLUMNS, CsvObserver};
+use uncoil::run::{RunReport, run};
+use uncoil::scene::Scene;
+
+const YOGA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/yoga-mat.toml");
+
+struct Logged {
+    dir: PathBuf,
+    report: RunReport,
+    scene: Scene,
+}
+
+/// One yoga-mat run with the CSV and MCAP observers, shared by the tests of this file.
+fn logged() -> &'static Logged {
+    static RUN: OnceLock<Logged> = OnceLock::new();
+    RUN.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("mcap-yoga-mat");
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let scene = Scene::from_file(YOGA).unwrap();
+        let mut csv = CsvObserver::new(&dir);
+        let mut mcap = McapObserver::new(&dir);
+        let report = run(&scene, &mut [&mut csv, &mut mcap]).unwrap();
+        Logged { dir, report, scene }
+    })
+}
+
+struct Read {
+    /// topic -> (schema name, schema encoding, message encoding, schema text)
+    channels: BTreeMap<String, (String, String, String, Vec<u8>)>,
+    /// topic -> (log time ns, JSON) in file order
+    messages: BTreeMap<String, Vec<(u64, Value)>>,
+    summary: mcap::read::Summary,
+    metadata: BTreeMap<String, BTreeMap<String, String>>,
+}
+
+fn read(path: &Path) -> Read {
+    let bytes = std::fs::read(path).unwrap();
+    let summary = mcap::read::Summary::read(&bytes)
+        .unwrap()
+        .expect("a finished file has a summary");
+    let mut channels = BTreeMap::new();
+    let mut messages: BTreeMap<String, Vec<(u64, Value)>> = BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let schema = m
+            .channel
+            .schema
+            .as_ref()
+            .expect("every channel has a schema");
+        channels.insert(
+            m.channel.topic.clone(),
+            (
+                schema.name.clone(),
+                schema.encoding.clone(),
+                m.channel.message_encoding.clone(),
+                schema.data.to_vec(),
+            ),
+        );
+        assert_eq!(m.log_time, m.publish_time, "stamped once, with sim time");
+        let json: Value = serde_json::from_slice(&m.data).expect("every message is JSON");
+        messages
+            .entry(m.channel.topic.clone())
+            .or_default()
+            .push((m.log_time, json));
+    }
+    let metadata = summary
+        .metadata_indexes
+        .iter()
+        .map(|i| {
+            let m = mcap::read::metadata(&bytes, i).unwrap();
+            (m.name, m.metadata)
+        })
+        .collect();
+    Read {
+        channels,
+        messages,
+        summary,
+        metadata,
+    }
+}
+
+fn ns(t_s: f64) -> u64 {
+    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+    let v = (t_s * 1e9).round() as u64;
+    v
+}
+
+#[test]
+fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
+    let logged = logged();
+    let path = logged.dir.join("run.mcap");
+    assert!(
+        !logged.dir.join("run.mcap.partial").exists(),
+        "the partial file was renamed"
+    );
+    let r = read(&path);
+
+    // Channels and schemas.
+    let expect = [
+        ("/events", "uncoil.Event"),
+        ("/scene", "foxglove.SceneUpdate"),
+        ("/state", "uncoil.State"),
+        ("/tf", "foxglove.FrameTransforms"),
+    ];
+    assert_eq!(
+        r.channels.keys().map(String::as_str).collect::<Vec<_>>(),
+        expect.map(|e| e.0)
+    );
+    for (topic, schema) in expect {
+        let (name, schema_enc, msg_enc, _) = &r.channels[topic];
+        assert_eq!(name, schema, "{topic}");
+        assert_eq!(schema_enc, "jsonschema", "{topic}");
+        assert_eq!(msg_enc, "json", "{topic}");
+    }
+    assert_eq!(
+        r.channels["/scene"].3,
+        SCENE_UPDATE_SCHEMA.as_bytes(),
+        "/scene carries the vendored Foxglove schema text unchanged"
+    );
+
+    // Counts: /state has one message per CSV row; the summary agrees with what was read.
+    let csv = std::fs::read_to_string(logged.dir.join("samples.csv")).unwrap();
+    let rows = csv.lines().count() - 1;
+    assert_eq!(
+        r.messages["/state"].len(),
+        rows,
+        "/state vs samples.csv rows"
+    );
+    // Foxglove Studio reads no chunk without message indexes (a chunk of schemas and
+    // channels alone would be one).
+    assert!(!r.summary.chunk_indexes.is_empty());
+    for c in &r.summary.chunk_indexes {
+        assert!(
+            c.message_index_length > 0,
+            "chunk at {} has no message index",
+            c.chunk_start_offset
+        );
+    }
+    let stats = r.summary.stats.as_ref().unwrap();
+    let total: usize = r.messages.values().map(Vec::len).sum();
+    assert_eq!(stats.message_count, total as u64);
+    let t_end = logged.report.sim_time_s;
+    let frames_f = (t_end * logged.scene.scene_rate_hz).floor();
+    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+    let frames = frames_f as usize;
+    let scene_n = r.messages["/scene"].len();
+    assert!(
+        (frames + 1..=frames + 2).contains(&scene_n),
+        "/scene: {scene_n} messages over {t_end:.4} s at {} Hz, expected {} or {}",
+        logged.scene.scene_rate_hz,
+        frames + 1,
+        frames + 2
+    );
+    assert_eq!(stats.message_start_time, 0, "the first drawing is at t = 0");
+    // One transform of the frame `contact` with each drawing, following the contact line.
+    assert_eq!(r.messages["/tf"].len(), scene_n);
+    let tf_last = &r.messages["/tf"].last().unwrap().1["transforms"][0];
+    assert_eq!(tf_last["child_frame_id"], "contact");
+    let x_state = r.messages["/state"].last().unwrap().1["x_m"]
+        .as_f64()
+        .unwrap();
+    let x_tf = tf_last["translation"]["x"].as_f64().unwrap();
+    assert!(
+        (x_tf - x_state).abs() <= 1e-6 && x_tf > 1.0,
+        "contact frame at {x_tf} m, last sample's x_m {x_state} m"
+    );
+    assert_eq!(stats.message_end_time, ns(t_end));
+
+    // Time order, and each /state message stamped with its own t_s.
+    for (topic, msgs) in &r.messages {
+        assert!(
+            msgs.windows(2).all(|w| w[0].0 <= w[1].0),
+            "{topic} is out of time order"
+        );
+    }
+    // /state fields are the CSV columns; an empty CSV cell is an absent field.
+    let mut cells = csv.lines().skip(1);
+    for (t, state) in &r.messages["/state"] {
+        assert_eq!(*t, ns(state["t_s"].as_f64().unwrap()));
+        let row: Vec<&str> = cells.next().unwrap().split(',').collect();
+        for (col, cell) in CSV_COLUMNS.iter().zip(&row) {
+            assert_eq!(
+                state.get(*col).is_some(),
+                !cell.is_empty(),
+                "t = {t} ns: {col} present in /state iff its CSV cell is filled"
+            );
+        }
+        assert_eq!(
+            state.as_object().unwrap().len(),
+            row.iter().filter(|c| !c.is_empty()).count()
+        );
+    }
+
+    // Events: every link that left the rolling coil, one bang start, one settled bang whose
+    // dissipated energy is the ledger's.
+    let events: Vec<&Value> = r.messages["/events"].iter().map(|(_, v)| v).collect();
+    let kind = |k: &str| events.iter().filter(|e| e["kind"] == k).count();
+    let detached: u64 = events
+        .iter()
+        .filter(|e| e["kind"] == "detach")
+        .map(|e| e["links"].as_u64().unwrap())
+        .sum();
+    let last_detached = events
+        .iter()
+        .rev()
+        .find(|e| e["kind"] == "detach")
+        .map(|e| e["detached"].as_u64().unwrap())
+        .unwrap();
+    assert_eq!(
+        detached, last_detached,
+        "detach events cover every link shed"
+    );
+    assert!(detached > 100 && detached < logged.report.links as u64);
+    assert_eq!(kind("bang_start"), 1);
+    assert_eq!(kind("bang_settled"), 1);
+    let settled = events.iter().find(|e| e["kind"] == "bang_settled").unwrap();
+    let dissipated = settled["dissipated_j"].as_f64().unwrap();
+    let ledger = logged.report.ledger.dissipated_by_bang_j;
+    assert!(
+        (dissipated - ledger).abs() <= 1e-12 * ledger.abs(),
+        "bang event {dissipated} J, ledger {ledger} J"
+    );
+
+    // Drawings: the whole tape wound at t = 0, the whole tape off the coil at the end.
+    let entity = |msg: &Value, id: &str| -> Option<Value> {
+        msg["entities"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|e| e["id"] == id)
+            .cloned()
+    };
+    let points = |e: &Value| e["lines"][0]["points"].as_array().unwrap().len();
+    let nodes = logged.report.links + 1;
+    let first = &r.messages["/scene"][0].1;
+    let last = &r.messages["/scene"].last().unwrap().1;
+    // Lines are simplified for drawing (within b/20): the wound spiral keeps most nodes, the
+    // laid tape, flat on the floor, far fewer, but it still spans the whole tape.
+    let on0 = points(&entity(first, "tape/on_coil").unwrap());
+    assert!(
+        on0 > nodes / 2 && on0 <= nodes,
+        "{on0} of {nodes} wound nodes drawn"
+    );
+    assert_eq!(points(&entity(first, "tape/off_coil").unwrap()), 0);
+    assert_eq!(points(&entity(last, "tape/on_coil").unwrap()), 0);
+    let off = entity(last, "tape/off_coil").unwrap();
+    let off_n = points(&off);
+    assert!(
+        off_n >= 2 && off_n < nodes,
+        "{off_n} of {nodes} laid nodes drawn"
+    );
+    let xs: Vec<f64> = off["lines"][0]["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["x"].as_f64().unwrap())
+        .collect();
+    let span =
+        xs.iter().copied().fold(f64::MIN, f64::max) - xs.iter().copied().fold(f64::MAX, f64::min);
+    assert!(span > 2.0, "laid tape drawn over {span} m");
+    for id in ["floor", "ghost/eq7", "ghost/exact"] {
+        assert!(entity(first, id).is_some(), "{id} drawn at t = 0");
+    }
+    // The exact-geometry model is tabulated down to half the bang radius (t = 2.27 s),
+    // before the bang settles: its ghost is deleted. Eq. (7) runs slower and lasts.
+    assert!(entity(last, "ghost/exact").is_none());
+    assert_eq!(last["deletions"][0]["id"], "ghost/exact");
+    assert!(entity(last, "ghost/eq7").is_some());
+    // At t = 0 both ghosts touch the floor where the tape does.
+    let exact0 = &entity(first, "ghost/exact").unwrap()["lines"][0]["points"][0];
+    let b = logged.scene.tape.thickness_m;
+    assert!(exact0["x"].as_f64().unwrap().abs() < 1e-6);
+    assert!((exact0["y"].as_f64().unwrap() - 0.5 * b).abs() < 1e-6);
+    let eq7 = &entity(first, "ghost/eq7").unwrap()["lines"];
+    let big_r = logged.scene.tape.outer_radius_m;
+    let spoke_tip = &eq7[1]["points"][1];
+    assert!(
+        spoke_tip["x"].as_f64().unwrap().abs() < 1e-6,
+        "spoke points down"
+    );
+    assert!(
+        spoke_tip["y"].as_f64().unwrap().abs() < 1e-6,
+        "circle stands on y = 0"
+    );
+    assert!((eq7[1]["points"][0]["y"].as_f64().unwrap() - big_r).abs() < 1e-6);
+    for e in first["entities"].as_array().unwrap() {
+        assert_eq!(e["frame_id"], "world");
+    }
+
+    // Metadata.
+    let md = &r.metadata;
+    assert_eq!(
+        md.keys().map(String::as_str).collect::<Vec<_>>(),
+        ["ledger", "resolution", "run", "scene", "solver", "tool"]
+    );
+    assert_eq!(md["scene"]["text"], std::fs::read_to_string(YOGA).unwrap());
+    assert_eq!(md["scene"]["name"], "yoga-mat");
+    assert_eq!(md["tool"]["version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(md["resolution"]["links_per_turn"], "32");
+    assert_eq!(md["solver"]["iterations"], "4");
+    assert_eq!(md["run"]["stop_reason"], logged.report.stop_reason);
+    let e0: f64 = md["ledger"]["e0_j"].parse().unwrap();
+    assert!((e0 - logged.report.ledger.e0_j).abs() <= 1e-12 * e0);
+}
+
+#[test]
+fn inspect_prints_channels_counts_time_range_metadata_and_ledger() {
+    let path = logged().dir.join("run.mcap");
+    Command::cargo_bin("uncoil")
+        .unwrap()
+        .arg("inspect")
+        .arg(&path)
+        .assert()
+        .success()
+        .stdout(predicate::str::contains("finished: yes"))
+        .stdout(predicate::str::contains("/scene"))
+        .stdout(predicate::str::contains("foxglove.SceneUpdate"))
+        .stdout(predicate::str::contains("/state"))
+        .stdout(predicate::str::contains("/events"))
+        .stdout(predicate::str::contains("time range: 0.000000 s"))
+        .stdout(predicate::str::contains("Metadata \"ledger\":"))
+        .stdout(predicate::str::contains("dissipated_by_bang_j = "))
+        .stdout(predicate::str::contains(
+            "time order: every channel in order",
+        ));
+}
+
+#[test]
+fn inspect_reads_a_cut_off_file_as_far_as_its_data_goes() {
+    // A file cut in half, as a crash leaves it: no summary, but the chunks before the cut.
+    let bytes = std::fs::read(logged().dir.join("run.mcap")).unwrap();
+    let whole = uncoil::inspect::inventory(&bytes).unwrap();
+    let half = uncoil::inspect::inventory(&bytes[..bytes.len() / 2]).unwrap();
+    assert!(whole.finished && !half.finished);
+    assert!(half.read_error.is_some());
+    let count = |inv: &uncoil::inspect::Inventory| -> u64 {
+        inv.channels.values().map(|c| c.messages).sum()
+    };
+    assert!(
+        count(&half) > count(&whole) / 4 && count(&half) < count(&whole),
+        "{} of {} messages read from half the file",
+        count(&half),
+        count(&whole)
+    );
+    assert!(half.time_ordered);
+    assert!(
+        half.metadata.contains_key("scene"),
+        "metadata before the cut"
+    );
+    assert!(
+        !half.metadata.contains_key("ledger"),
+        "the ledger comes last"
+    );
+}
+
+#[test]
+fn inspect_of_a_file_that_is_not_mcap_exits_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("x.mcap");
+    std::fs::write(&path, "not an MCAP file").unwrap();
+    Command::cargo_bin("uncoil")
+        .unwrap()
+        .arg("inspect")
+        .arg(&path)
+        .assert()
+        .code(1)
+        .stderr(predicate::str::starts_with("error: not an MCAP file"));
+}
+
+/// A small scene that runs for a long time: a tiny step over a long push.
+const SLOW: &str = r#"name = "slow"
+[tape]
+outer_radius_m = 0.06
+thickness_m = 0.005
+mass_kg = 1.5
+[push]
+contact_speed_m_s = 0.3
+[solver]
+max_dt_s = 0.00001
+"#;
+
+#[test]
+fn no_mcap_flag_writes_no_log() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("small.toml");
+    std::fs::write(
+        &scene,
+        "[tape]\nouter_radius_m = 0.02\nthickness_m = 0.004\nmass_kg = 0.2\n\
+         [push]\ncontact_speed_m_s = 0.3\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    Command::cargo_bin("uncoil")
+        .unwrap()
+        .args(["run", "--no-mcap", "--out"])
+        .arg(&out)
+        .arg(&scene)
+        .assert()
+        .success();
+    assert!(out.join("samples.csv").exists());
+    assert!(!out.join("run.mcap").exists());
+    assert!(!out.join("run.mcap.partial").exists());
+}
+
+#[test]
+fn ctrl_c_stops_the_run_and_leaves_a_finished_log() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("slow.toml");
+    std::fs::write(&scene, SLOW).unwrap();
+    let out = dir.path().join("out");
+    let bin = assert_cmd::cargo::cargo_bin("uncoil");
+    let child = std::process::Command::new(bin)
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The handler is installed before the run opens its files.
+    let partial = out.join("run.mcap.partial");
+    let start = Instant::now();
+    while !partial.exists() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "the run never started"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    let killed = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let output = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(130), "stderr: {stderr}");
+    assert!(stderr.contains("interrupted"), "stderr: {stderr}");
+    assert!(!partial.exists(), "the partial file was renamed");
+    let r = read(&out.join("run.mcap"));
+    assert_eq!(r.metadata["run"]["stop_reason"], "interrupted");
+    assert!(r.metadata.contains_key("ledger"));
+    let last_event = &r.messages["/events"].last().unwrap().1;
+    assert_eq!(last_event["kind"], "warning");
+    assert!(!r.messages["/state"].is_empty());
+    // The run stopped long before its natural end (about 2.3 s simulated).
+    let t_end = r.summary.stats.as_ref().unwrap().message_end_time;
+    assert!(t_end < ns(2.0), "stopped at {t_end} ns");
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["stop_reason"], "interrupted");
+}
