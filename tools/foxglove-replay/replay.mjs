@@ -129,11 +129,16 @@ try {
     await page.getByText(schema, { exact: true }).first().waitFor({ timeout: 10000 });
     console.log(`topic ${topic} (${schema}) listed`);
   }
-  const problems = await page.locator('[data-sidebar-key="connection"] .MuiBadge-badge')
-    .innerText().catch(() => "");
-  if (problems.trim() !== "") {
-    throw new Error(`the data source reports ${problems.trim()} problem(s)`);
-  }
+  // The data source's sidebar icon carries a badge with the count of player problems (a
+  // schema it cannot parse, a chunk it cannot read).
+  const checkProblems = async (when) => {
+    const badge = await page.locator('[data-sidebar-key="connection"] .MuiBadge-badge')
+      .innerText().catch(() => "");
+    if (badge.trim() !== "") {
+      throw new Error(`${when}: the data source reports ${badge.trim()} problem(s)`);
+    }
+  };
+  await checkProblems("after loading");
 
   // Layouts -> Import layout, answered with the shipped layout file.
   await page.locator('[data-sidebar-key="layouts"]').click();
@@ -163,6 +168,7 @@ try {
   const shown = await page.locator('[data-testid="PlaybackTime-text"] input').inputValue()
     .catch(() => "?");
   console.log(`seeked to ${shown}`);
+  await checkProblems("after seeking");
   await page.screenshot({ path: shotPath });
   console.log(`screenshot: ${shotPath}`);
 } catch (err) {
