@@ -190,6 +190,8 @@ fn flatten(prefix: &str, value: &serde_json::Value, out: &mut BTreeMap<String, S
 
 impl Observer for McapObserver {
     fn observe_init(&mut self, scene: &Scene) -> anyhow::Result<()> {
+        // An earlier run's finished log must not survive beside this run's partial one.
+        crate::output::remove_stale(&self.path)?;
         let tmp = self.partial();
         let file =
             File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
@@ -309,7 +311,8 @@ impl Observer for McapObserver {
                 ("links", report.links.to_string()),
                 ("steps", report.steps.to_string()),
                 ("sim_time_s", report.sim_time_s.to_string()),
-                ("wall_time_s", report.wall_time_s.to_string()),
+                // No wall time: it differs from run to run, and a repeated run must write the
+                // same bytes (report.json has it).
             ],
         ))?;
         let mut ledger = BTreeMap::new();

@@ -172,17 +172,20 @@ fn zero_gravity_floats_on_the_floor_and_says_so() {
 }
 
 #[test]
-fn a_slippery_floor_run_is_byte_identical_when_repeated() {
+fn a_slippery_floor_run_writes_the_same_bytes_when_repeated() {
     let text = shortened("friction-0.05", 0.4);
     let scene = Scene::from_toml_str(&text, "friction-0.05").unwrap();
     let dirs = [tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap()];
     let mut csvs = Vec::new();
+    let mut mcaps = Vec::new();
     let mut reports = Vec::new();
     for d in &dirs {
         let mut csv = uncoil::output::CsvObserver::new(d.path());
         let mut json = uncoil::output::ReportObserver::new(d.path());
-        run(&scene, &mut [&mut csv, &mut json]).unwrap();
+        let mut log = uncoil::mcap_log::McapObserver::new(d.path());
+        run(&scene, &mut [&mut csv, &mut json, &mut log]).unwrap();
         csvs.push(std::fs::read(d.path().join("samples.csv")).unwrap());
+        mcaps.push(std::fs::read(d.path().join("run.mcap")).unwrap());
         let mut v: serde_json::Value =
             serde_json::from_slice(&std::fs::read(d.path().join("report.json")).unwrap()).unwrap();
         // Wall times are the only fields that may differ.
@@ -193,6 +196,8 @@ fn a_slippery_floor_run_is_byte_identical_when_repeated() {
     }
     assert!(csvs[0].len() > 10_000, "{} bytes", csvs[0].len());
     assert!(csvs[0] == csvs[1], "two runs wrote different CSV bytes");
+    assert!(mcaps[0].len() > 10_000, "{} bytes", mcaps[0].len());
+    assert!(mcaps[0] == mcaps[1], "two runs wrote different MCAP bytes");
     assert_eq!(reports[0], reports[1], "two runs wrote different reports");
 }
 
@@ -204,6 +209,7 @@ fn a_killed_run_leaves_only_partial_files() {
     // Finished files of an earlier run must not survive beside a killed one.
     std::fs::write(out.join("samples.csv"), "an earlier run\n").unwrap();
     std::fs::write(out.join("report.json"), "{}\n").unwrap();
+    std::fs::write(out.join("run.mcap"), "an earlier log\n").unwrap();
     let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("uncoil"))
         .arg("run")
         .arg(hard_path("thin-300"))
@@ -231,6 +237,7 @@ fn a_killed_run_leaves_only_partial_files() {
     child.wait().unwrap();
     assert!(!out.join("samples.csv").exists(), "samples.csv exists");
     assert!(!out.join("report.json").exists(), "report.json exists");
+    assert!(!out.join("run.mcap").exists(), "run.mcap exists");
     let text = std::fs::read_to_string(&partial).unwrap();
     assert!(text.starts_with("t_s,laid_fraction,"), "{}", &text[..40]);
     assert!(text.lines().count() > 10);
