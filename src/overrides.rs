@@ -165,14 +165,7 @@ pub fn scene_file_with_overrides(
     path: &std::path::Path,
     overrides: &[Override],
 ) -> Result<Scene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
-        path: path.to_owned(),
-        source,
-    })?;
-    let stem = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let (text, stem) = crate::scene::read_scene_file(path)?;
     scene_with_overrides(&text, &stem, overrides)
 }
 

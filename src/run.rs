@@ -357,7 +357,7 @@ pub fn run_until(
     let mut max_gap: f64 = 0.0;
     let mut max_pen: f64 = 0.0;
     // Momentum and time at the last sample, for the force balance over the interval.
-    let mut at_last_sample = (model.observe().momentum_kg_m_s, 0.0);
+    let mut at_last_sample = (initial.momentum_kg_m_s, 0.0);
     let frame_interval = if scene.scene_rate_hz > 0.0 && observers.iter().any(|o| o.wants_frames())
     {
         1.0 / scene.scene_rate_hz

@@ -405,6 +405,19 @@ impl Display for Shown {
 
 /// Rejects NaN and infinities, then returns `value` if `ok`, else an error with `rule`.
 /// `ok` is evaluated by the caller; for a non-finite value the finiteness error wins.
+/// The text of the scene file at `path` and its stem, the scene's default name.
+pub(crate) fn read_scene_file(path: &Path) -> Result<(String, String), SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+        path: path.to_owned(),
+        source,
+    })?;
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    Ok((text, stem))
+}
+
 fn check(key: &str, value: f64, ok: bool, rule: impl Into<String>) -> Result<f64, SceneError> {
     if !value.is_finite() {
         return Err(invalid(key, value, "must be finite"));
@@ -436,15 +449,7 @@ impl Scene {
     /// Reads and validates the scene file at `path`; the scene name defaults to the file
     /// stem.
     pub fn from_file(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
-        let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
-            path: path.to_owned(),
-            source,
-        })?;
-        let stem = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let (text, stem) = read_scene_file(path.as_ref())?;
         Self::from_toml_str(&text, &stem)
     }
 

@@ -121,48 +121,23 @@ fn a_frictionless_floor_slips_and_bunches_and_says_so() {
     assert!(slip.t_s.is_some_and(|t| t < 0.1), "{slip:?}");
 }
 
-/// Keeps the largest floor force and the kinetic energy's range over a run.
-#[derive(Default)]
-struct FloorAndKinetic {
-    max_normal_n: f64,
-    kinetic_j: Vec<f64>,
-}
-
-impl uncoil::run::Observer for FloorAndKinetic {
-    fn observe_init(&mut self, _scene: &Scene) -> anyhow::Result<()> {
-        Ok(())
-    }
-    fn observe_sample(&mut self, s: &uncoil::run::Sample) -> anyhow::Result<()> {
-        self.max_normal_n = self.max_normal_n.max(s.normal_n.abs());
-        self.kinetic_j.push(s.kinetic_j);
-        Ok(())
-    }
-    fn observe_final(&mut self, _report: &RunReport) -> anyhow::Result<()> {
-        Ok(())
-    }
-}
-
 #[test]
 fn zero_gravity_floats_on_the_floor_and_says_so() {
     // No weight: the exact model would need a floor that pulls from the start, and the
     // floor carries next to nothing (the mat would weigh 14.7 N under 1 g); the kinetic
     // energy is all the energy there is, and it stays.
     let scene = Scene::from_toml_str(&shortened("zero-gravity", 0.1), "zero-gravity").unwrap();
-    let mut seen = FloorAndKinetic::default();
-    let report = run(&scene, &mut [&mut seen]).unwrap();
+    let (samples, report) = crate::support::run_kept(&scene);
+    let max_normal_n = samples.iter().map(|s| s.normal_n.abs()).fold(0.0, f64::max);
     assert_eq!(report.status, Status::Completed, "{}", report.stop_reason);
     assert!(
         kinds(&report).contains(&LimitKind::ExactModelHops),
         "{:#?}",
         report.reference_limits
     );
-    assert!(
-        seen.max_normal_n < 0.01,
-        "floor force up to {} N",
-        seen.max_normal_n
-    );
-    let k0 = seen.kinetic_j[0];
-    for k in &seen.kinetic_j {
+    assert!(max_normal_n < 0.01, "floor force up to {} N", max_normal_n);
+    let k0 = samples[0].kinetic_j;
+    for k in samples.iter().map(|s| s.kinetic_j) {
         assert!(
             (k - k0).abs() < 1e-3 * k0,
             "kinetic energy {k} J from {k0} J"

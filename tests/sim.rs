@@ -1,43 +1,16 @@
 //! The contact-resolved run against its references, its energy ledger, and determinism.
 
-use uncoil::run::{Observer, RunReport, Sample, run};
+use crate::support::run_kept;
+use uncoil::run::run;
 use uncoil::scene::Scene;
-
-/// Keeps every sample and the final report in memory.
-#[derive(Default)]
-struct Keep {
-    samples: Vec<Sample>,
-    report: Option<RunReport>,
-}
-
-impl Observer for Keep {
-    fn observe_init(&mut self, _scene: &Scene) -> anyhow::Result<()> {
-        Ok(())
-    }
-    fn observe_sample(&mut self, sample: &Sample) -> anyhow::Result<()> {
-        self.samples.push(*sample);
-        Ok(())
-    }
-    fn observe_final(&mut self, report: &RunReport) -> anyhow::Result<()> {
-        self.report = Some(report.clone());
-        Ok(())
-    }
-}
 
 fn yoga_mat() -> Scene {
     Scene::from_file(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/yoga-mat.toml")).unwrap()
 }
 
-fn run_kept(scene: &Scene) -> Keep {
-    let mut keep = Keep::default();
-    run(scene, &mut [&mut keep]).unwrap();
-    keep
-}
-
 #[test]
 fn yoga_mat_follows_the_exact_geometry_model_and_keeps_its_energy_for_the_bang() {
-    let keep = run_kept(&yoga_mat());
-    let report = keep.report.unwrap();
+    let (samples, report) = run_kept(&yoga_mat());
     // Target of the core issue: within 0.3 % of the exact-geometry model at the milestones.
     for m in report.milestones.iter().filter(|m| m.label != "2b") {
         let err = m
@@ -83,7 +56,7 @@ fn yoga_mat_follows_the_exact_geometry_model_and_keeps_its_energy_for_the_bang()
         );
     }
     // No NaN or infinity in the simulation columns, and the ledger closes at every sample.
-    for s in &keep.samples {
+    for s in &samples {
         let parts = s.lost_step_j + s.lost_detach_j + s.lost_freeze_j + s.lost_bang_j;
         assert!(
             (parts - s.dissipated_j).abs() < 1e-9,
@@ -133,14 +106,12 @@ fn a_coil_starts_rolling_without_sinking_into_the_floor() {
     // it in the first 0.2 s and lost 0.5 % of E0 there (with a drop from a contact circle
     // that did not match its start pose). Both are gone: the first 0.3 s keep E0.
     let scene = thin_tape_with(&[("max_time_s = 60.0", "max_time_s = 0.3")]);
-    let keep = run_kept(&scene);
-    let report = keep.report.unwrap();
-    let last = keep.samples.last().unwrap();
+    let (samples, report) = run_kept(&scene);
+    let last = samples.last().unwrap();
     assert!(last.t_s > 0.29);
     let lost = last.dissipated_j / report.ledger.e0_j;
     assert!(lost.abs() < 1e-4, "lost {:.4} % of E0", 100.0 * lost);
-    let sink = keep
-        .samples
+    let sink = samples
         .iter()
         .map(|s| s.max_penetration_m)
         .fold(0.0, f64::max);
@@ -155,7 +126,7 @@ fn a_thin_tape_keeps_its_energy_down_to_the_bang() {
         ("links_per_turn = 40", "links_per_turn = 24"),
         ("settle_time_s = 0.003", "settle_time_s = 0.0"),
     ]);
-    let report = run_kept(&scene).report.unwrap();
+    let (_, report) = run_kept(&scene);
     let two_b = report.milestones.iter().find(|m| m.label == "2b").unwrap();
     let lost = two_b.dissipated_j.unwrap() / report.ledger.e0_j;
     assert!(lost.abs() < 0.01, "lost {:.3} % of E0", 100.0 * lost);

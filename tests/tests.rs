@@ -5,5 +5,6 @@ mod fuzz;
 mod hard;
 mod mcap;
 mod sim;
+mod support;
 mod sweep;
 mod variants;

@@ -1,41 +1,15 @@
 //! Every variant of the paper as a scene: the run against its valid reference, the energy
 //! ledger, and what the paradox table shows (the competing equations that it does not follow).
 
+use crate::support::run_kept;
 use uncoil::compare::{sim_sign_change, window_mean};
 use uncoil::forces::{force_reference, sign_change_fraction};
 use uncoil::rivals::{Rival, rivals};
-use uncoil::run::{Observer, RunReport, Sample, run};
+use uncoil::run::{RunReport, Sample};
 use uncoil::scene::Scene;
-
-/// Keeps every sample and the final report in memory.
-#[derive(Default)]
-struct Keep {
-    samples: Vec<Sample>,
-    report: Option<RunReport>,
-}
-
-impl Observer for Keep {
-    fn observe_init(&mut self, _scene: &Scene) -> anyhow::Result<()> {
-        Ok(())
-    }
-    fn observe_sample(&mut self, sample: &Sample) -> anyhow::Result<()> {
-        self.samples.push(*sample);
-        Ok(())
-    }
-    fn observe_final(&mut self, report: &RunReport) -> anyhow::Result<()> {
-        self.report = Some(report.clone());
-        Ok(())
-    }
-}
 
 fn scene(name: &str) -> Scene {
     Scene::from_file(format!("{}/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap()
-}
-
-fn run_kept(scene: &Scene) -> (Vec<Sample>, RunReport) {
-    let mut keep = Keep::default();
-    run(scene, &mut [&mut keep]).unwrap();
-    (keep.samples, keep.report.unwrap())
 }
 
 fn rival<'a>(rv: &'a [Rival], label: &str) -> &'a Rival {
