@@ -241,7 +241,11 @@ fn run_scene(
     let report = run_until(scene, &mut observers, stop)?;
     let mut text = summary(&report, &dir);
     if mcap {
-        text.push_str(&format!("Wrote {}\n", log.path().display()));
+        text.push_str(&format!(
+            "Wrote {0}: open it in Foxglove with the layout tools/foxglove-layout.json, or list \
+             it with `uncoil inspect {0}`\n",
+            log.path().display()
+        ));
     }
     Ok((text, report.status, report.stop_reason))
 }
