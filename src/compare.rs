@@ -131,7 +131,8 @@ fn rel(t: Option<f64>, t_sim: Option<f64>) -> String {
     }
 }
 
-fn cell(rival: &Rival, f: f64, t_sim: Option<f64>) -> String {
+/// One rival's time at `f` with its difference to the simulation, or why it has none.
+pub fn cell(rival: &Rival, f: f64, t_sim: Option<f64>) -> String {
     match rival.time_at_fraction(f) {
         Some(t) => format!("{t:.4} ({})", rel(Some(t), t_sim)),
         None => match rival.stall_fraction {

@@ -11,7 +11,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 
+use crate::compare::cell;
 use crate::guard::Status;
+use crate::rivals::{Case, rivals};
 use crate::run::{Observer, RunReport, Sample};
 use crate::scene::Scene;
 
@@ -227,37 +229,9 @@ fn secs(v: Option<f64>) -> String {
     v.map_or_else(|| "-".into(), |v| format!("{v:.4}"))
 }
 
-/// The readable summary printed after a run.
-pub fn summary(report: &RunReport, out_dir: &Path) -> String {
-    let s = &report.scene;
-    let l = &report.ledger;
-    let mut o = String::new();
-    let _ = writeln!(
-        o,
-        "uncoil: {} (R = {} m, b = {} m, M = {} kg, push {} m/s, friction {})",
-        s.name,
-        s.tape.outer_radius_m,
-        s.tape.thickness_m,
-        s.tape.mass_kg,
-        s.push_speed_m_s,
-        s.friction
-    );
-    let _ = writeln!(
-        o,
-        "  {} links ({} per turn), {} steps, {:.3} s simulated in {:.3} s wall ({:.3} s to the bang); {}: {}",
-        report.links,
-        s.links_per_turn,
-        report.steps,
-        report.sim_time_s,
-        report.wall_time_s,
-        report.wall_time_rolling_s,
-        match report.status {
-            Status::Completed => "completed",
-            Status::Stopped => "STOPPED by a guard",
-        },
-        report.stop_reason
-    );
-    let _ = writeln!(o);
+/// The level coil's times: the exact geometry it converges to, eq. (7) and eq. (17), with
+/// the simulation's error and the continuum model's own.
+fn coil_times(o: &mut String, report: &RunReport) {
     let _ = writeln!(
         o,
         "Time to reach each radius (compared at equal laid mass fraction f = 1 - (r/R)^2):"
@@ -290,6 +264,77 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
         o,
         "  ex/eq7: the continuum model's own idealisation (O(b/r)); eq. 17 ignores gravity."
     );
+}
+
+/// Any other case's times against the rivals the paper gives for it (`uncoil compare`'s
+/// table as plain text).
+fn rival_times(o: &mut String, report: &RunReport) {
+    let rv = rivals(&report.scene);
+    let _ = writeln!(
+        o,
+        "Time to reach each laid fraction f, against the analyses of {} (the rival's time over the \
+         simulation's, minus 1; * = the reference the simulation must converge to):",
+        Case::of(&report.scene).section()
+    );
+    let mut head = format!("  {:<6} {:>7} {:>9}", "", "f", "sim s");
+    for r in &rv {
+        let star = if r.valid { " *" } else { "" };
+        let _ = write!(head, " {:>22}", format!("{}{star} s", r.label));
+    }
+    let _ = writeln!(o, "{head}");
+    for m in &report.milestones {
+        let mut row = format!(
+            "  {:<6} {:>7.4} {:>9}",
+            m.label,
+            m.laid_fraction,
+            secs(m.t_sim_s)
+        );
+        for r in &rv {
+            let _ = write!(row, " {:>22}", cell(r, m.laid_fraction, m.t_sim_s));
+        }
+        let _ = writeln!(o, "{row}");
+    }
+    for r in &rv {
+        let _ = writeln!(o, "  {}: {}", r.label, r.description);
+    }
+}
+
+/// The readable summary printed after a run.
+pub fn summary(report: &RunReport, out_dir: &Path) -> String {
+    let s = &report.scene;
+    let l = &report.ledger;
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
+        "uncoil: {} (R = {} m, b = {} m, M = {} kg, push {} m/s, friction {})",
+        s.name,
+        s.tape.outer_radius_m,
+        s.tape.thickness_m,
+        s.tape.mass_kg,
+        s.push_speed_m_s,
+        s.friction
+    );
+    let _ = writeln!(
+        o,
+        "  {} links ({} per turn), {} steps, {:.3} s simulated in {:.3} s wall ({:.3} s to the bang); {}: {}",
+        report.links,
+        s.links_per_turn,
+        report.steps,
+        report.sim_time_s,
+        report.wall_time_s,
+        report.wall_time_rolling_s,
+        match report.status {
+            Status::Completed => "completed",
+            Status::Stopped => "STOPPED by a guard",
+        },
+        report.stop_reason
+    );
+    let _ = writeln!(o);
+    if Case::of(s) == Case::Coil {
+        coil_times(&mut o, report);
+    } else {
+        rival_times(&mut o, report);
+    }
     if let Some(f) = report.geo_hop_fraction {
         let _ = writeln!(
             o,

@@ -501,10 +501,12 @@ impl Scene {
         let core = check(
             "tape.core_radius_m",
             t.core_radius_m,
-            t.core_radius_m >= 0.0 && t.core_radius_m + 2.0 * b <= r,
+            // Relative slack of 1e-12: 0.050001 - 2 * 1e-6 is 0.049998999999999995 in f64,
+            // and a core written as 0.049999 must pass.
+            t.core_radius_m >= 0.0 && t.core_radius_m + 2.0 * b <= r * (1.0 + 1e-12),
             format!(
                 "must be >= 0 and <= tape.outer_radius_m - 2 * tape.thickness_m (= {}): \
-                 must leave at least two turns of tape",
+                 must leave at least one full turn of the tape's midline",
                 r - 2.0 * b
             ),
         )?;

@@ -104,12 +104,12 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
         ],
     ),
     (
-        "core leaving fewer than two turns",
+        "core leaving less than one turn",
         Edit::Replace("mass_kg = 1.5", "mass_kg = 1.5\ncore_radius_m = 0.055"),
         &[
             "tape.core_radius_m = 0.055: ",
             "must be >= 0 and <= tape.outer_radius_m - 2 * tape.thickness_m",
-            "must leave at least two turns of tape",
+            "must leave at least one full turn of the tape's midline",
         ],
     ),
     (
