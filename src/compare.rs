@@ -2,10 +2,11 @@
 //! and in every competing analytic equation of motion the paper gives for it, with the
 //! relative differences. It formats a finished [`RunReport`]; it does not run anything.
 
+use std::f64::consts::PI;
 use std::fmt::Write as _;
 
 use crate::forces::{force_reference, sign_change_fraction};
-use crate::rivals::{Case, Rival, rivals};
+use crate::rivals::{Case, Rival, SpoolGeometry, rivals, spool_spins};
 use crate::run::{Observer, RunReport, Sample};
 use crate::scene::Scene;
 
@@ -123,6 +124,66 @@ pub fn force_table(report: &RunReport, samples: &[Sample]) -> String {
     o
 }
 
+/// The simulation's spin `|theta'|` where its unrolled angle first reaches `theta`
+/// (linear between samples), `None` if it never does.
+pub fn spin_at_theta(samples: &[Sample], theta: f64) -> Option<f64> {
+    let i = samples.iter().position(|s| s.theta_rad >= theta)?;
+    let b = &samples[i];
+    let Some(a) = i.checked_sub(1).map(|j| &samples[j]) else {
+        return Some(b.omega_rad_s.abs());
+    };
+    let w = (theta - a.theta_rad) / (b.theta_rad - a.theta_rad);
+    Some(a.omega_rad_s.abs() + w * (b.omega_rad_s.abs() - a.omega_rad_s.abs()))
+}
+
+/// Turns at which [`spin_table`] reads the spin: three inside the first turn, where the
+/// outer partial turn's weight modulates it most, then whole turns.
+pub const SPIN_TURNS: [f64; 12] = [
+    0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 5.0, 10.0, 20.0, 30.0, 40.0,
+];
+
+/// For the spool cases, the simulation's spin against each energy integral at
+/// [`SPIN_TURNS`] (up to 90 % laid); empty for the other cases.
+pub fn spin_table(report: &RunReport, samples: &[Sample]) -> String {
+    let scene = &report.scene;
+    let spins = spool_spins(scene);
+    let mut o = String::new();
+    if spins.is_empty() {
+        return o;
+    }
+    let sg = SpoolGeometry::of(scene);
+    let _ = writeln!(
+        o,
+        "Spin theta' (rad/s) after a number of turns: the energy integrals centre the wound tape \
+         on the axis, the spiral's outer partial turn is off it except at whole turns.\n"
+    );
+    let mut head = String::from("| turns | f | sim |");
+    let mut rule = String::from("|---|---|---|");
+    for (label, _) in &spins {
+        let _ = write!(head, " {label} |");
+        rule.push_str("---|");
+    }
+    let _ = writeln!(o, "{head}\n{rule}");
+    for k in SPIN_TURNS {
+        let theta = 2.0 * PI * k;
+        let f = sg.r_m * theta / sg.l_m;
+        if f > 0.9 {
+            break;
+        }
+        let Some(w) = spin_at_theta(samples, theta) else {
+            break;
+        };
+        let mut row = format!("| {k} | {f:.4} | {w:.4} |");
+        for (_, spin) in &spins {
+            let wr = spin(theta);
+            let _ = write!(row, " {wr:.4} ({:+.2}%) |", 100.0 * (wr / w - 1.0));
+        }
+        let _ = writeln!(o, "{row}");
+    }
+    let _ = writeln!(o);
+    o
+}
+
 /// `t / t_sim - 1` as a signed percentage, or a dash.
 fn rel(t: Option<f64>, t_sim: Option<f64>) -> String {
     match (t, t_sim) {
@@ -218,6 +279,7 @@ pub fn table(report: &RunReport, samples: &[Sample]) -> String {
         l.kinetic_into_bang_j
     );
     let _ = writeln!(o);
+    o.push_str(&spin_table(report, samples));
     o.push_str(&force_table(report, samples));
     o
 }
