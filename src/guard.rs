@@ -9,6 +9,7 @@
 use serde::Serialize;
 
 use crate::model::{Health, Observation, Phase};
+use crate::reference::ExactGeometry;
 use crate::scene::Scene;
 use crate::spiral::Spiral;
 
@@ -261,6 +262,8 @@ pub struct Applicability {
     a_m: f64,
     push_speed_m_s: f64,
     outer_radius_m: f64,
+    /// The exact model sliding on a frictionless floor, for where its contact line is.
+    sliding: Option<ExactGeometry>,
     hop_fraction: Option<f64>,
     slip_steps: u32,
     lift_off_steps: u32,
@@ -269,9 +272,8 @@ pub struct Applicability {
 }
 
 impl Applicability {
-    /// A watcher for `scene`; `hop_fraction` is the laid fraction from which the
-    /// exact-geometry model needs a floor that pulls, if it does.
-    pub fn new(scene: &Scene, hop_fraction: Option<f64>) -> Self {
+    /// A watcher for `scene` against its exact-geometry model `exact`.
+    pub fn new(scene: &Scene, exact: &ExactGeometry) -> Self {
         let t = &scene.tape;
         Self {
             length_m: tape_length_m(scene),
@@ -279,7 +281,8 @@ impl Applicability {
             a_m: Spiral::wound(t.outer_radius_m, t.thickness_m, t.core_radius_m).a_m,
             push_speed_m_s: scene.push_speed_m_s,
             outer_radius_m: t.outer_radius_m,
-            hop_fraction,
+            sliding: exact.is_sliding().then(|| exact.clone()),
+            hop_fraction: exact.hop_onset_fraction(),
             slip_steps: 0,
             lift_off_steps: 0,
             mismatch_steps: 0,
@@ -314,7 +317,8 @@ impl Applicability {
             return;
         }
         let b = self.thickness_m;
-        if let Some(slip) = health.slip_m_s {
+        // On a frictionless floor the references slide by construction: no slip to flag.
+        if let Some(slip) = health.slip_m_s.filter(|_| self.sliding.is_none()) {
             let scale = xdot_m_s.abs().max(self.push_speed_m_s);
             if slip.abs() > SLIP_FRACTION * scale {
                 self.slip_steps += 1;
@@ -331,7 +335,14 @@ impl Applicability {
             }
         }
         let laid = obs.laid_fraction * self.length_m;
-        let mismatch = obs.x_m - laid;
+        // Where the contact line should be: rolling lays the tape where it goes; sliding
+        // keeps the centre of mass, x ~ laid^2 / (2 L) (eqs. 100, 106).
+        let expected = self
+            .sliding
+            .as_ref()
+            .and_then(|e| e.sliding_contact_x(obs.psi_low))
+            .unwrap_or(laid);
+        let mismatch = obs.x_m - expected;
         if mismatch.abs() > LAID_MISMATCH_FRACTION * laid + b {
             self.mismatch_steps += 1;
         } else {
@@ -344,8 +355,8 @@ impl Applicability {
                 LimitKind::Skid
             };
             let detail = format!(
-                "the contact line is at x = {:.4} m with {laid:.4} m of tape laid \
-                 (bound {} % + b)",
+                "the contact line is at x = {:.4} m, expected {expected:.4} m with {laid:.4} m \
+                 of tape laid (bound {} % + b)",
                 obs.x_m,
                 100.0 * LAID_MISMATCH_FRACTION
             );
@@ -543,7 +554,8 @@ mod tests {
     #[test]
     fn limits_need_consecutive_steps_and_are_noted_once() {
         let scene = yoga();
-        let mut a = Applicability::new(&scene, None);
+        let exact = crate::run::exact_geometry(&scene);
+        let mut a = Applicability::new(&scene, &exact);
         let slipping = Health {
             slip_m_s: Some(0.1),
             ..calm()
@@ -559,7 +571,8 @@ mod tests {
         assert_eq!(kinds, vec![LimitKind::Slip]);
 
         // Contact line 0.1 m behind 0.207 m of laid tape: bunching; lifted off the floor.
-        let mut a = Applicability::new(&scene, Some(0.5));
+        let mut a = Applicability::new(&scene, &exact);
+        a.hop_fraction = Some(0.5);
         let behind = Observation {
             x_m: 0.1,
             normal_n: 0.0,
@@ -579,5 +592,48 @@ mod tests {
             ]
         );
         assert_eq!(limits[2].t_s, None, "the hop at f = 0.5 was never reached");
+    }
+
+    #[test]
+    fn a_sliding_coil_is_judged_against_the_sliding_contact_line() {
+        let scene = Scene::from_toml_str(
+            "[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\nmass_kg = 1.5\n\
+             [floor]\nfriction = 0.0\n[push]\ncontact_speed_m_s = 0.3\n",
+            "sliding",
+        )
+        .expect("valid scene");
+        let exact = crate::run::exact_geometry(&scene);
+        let psi = exact.psi_at_fraction(0.5);
+        let x = exact.sliding_contact_x(psi).expect("sliding");
+        let laid = exact.spiral().arc(psi, exact.spiral().psi_out);
+        // Zero momentum: about laid^2 / (2 L) (eq. 106), well short of the laid length.
+        let l = exact.spiral().length();
+        assert!(
+            (x / (laid * laid / (2.0 * l)) - 1.0).abs() < 0.1,
+            "{x} {laid}"
+        );
+        let at = |x_m: f64| Observation {
+            laid_fraction: 0.5,
+            psi_low: psi,
+            x_m,
+            ..step(1.0)
+        };
+        let slipping = Health {
+            slip_m_s: Some(0.3),
+            ..calm()
+        };
+        // Where the sliding model puts it, slipping as sliding does: nothing to say.
+        let mut a = Applicability::new(&scene, &exact);
+        for _ in 0..2 * CONSECUTIVE_STEPS {
+            a.observe(&at(x), &slipping, 0.3);
+        }
+        assert!(a.limits().is_empty(), "{:?}", a.limits());
+        // Where rolling would put it: the coil has skidded ahead of the sliding model.
+        let mut a = Applicability::new(&scene, &exact);
+        for _ in 0..CONSECUTIVE_STEPS {
+            a.observe(&at(laid), &slipping, 0.3);
+        }
+        let kinds: Vec<LimitKind> = a.limits().iter().map(|l| l.kind).collect();
+        assert_eq!(kinds, vec![LimitKind::Skid]);
     }
 }

@@ -523,6 +523,28 @@ impl ExactGeometry {
         self.traj.time_at(self.psi_at_fraction(f))
     }
 
+    /// Whether the model slides (frictionless floor) rather than rolls.
+    pub fn is_sliding(&self) -> bool {
+        self.sliding
+    }
+
+    /// Sliding on a frictionless floor: the peel point's x, measured from where it started,
+    /// with the total horizontal momentum zero, so the centre of mass of the coil and the
+    /// laid tape stays put (eqs. 100, 106 for a centred coil; here with the spiral's own
+    /// off-centre mass). `None` for a rolling model, whose peel point is at the laid length.
+    pub fn sliding_contact_x(&self, psi: f64) -> Option<f64> {
+        if !self.sliding {
+            return None;
+        }
+        // M x_peel + m (x_cm - s) - (M - m) s / 2 is conserved, s the laid length.
+        let moment = |psi: f64| {
+            let pose = self.pose(psi);
+            let laid_mass = self.p.mass_kg - pose.mass_kg;
+            0.5 * laid_mass * pose.laid_m - pose.mass_kg * (pose.x_cm - pose.laid_m)
+        };
+        Some((moment(psi) - moment(self.spiral.psi_out)) / self.p.mass_kg)
+    }
+
     /// The state with the lowest point at `psi`.
     pub fn state_at_psi(&self, psi: f64, t_s: f64) -> RefState {
         let pose = self.pose(psi);
@@ -533,12 +555,10 @@ impl ExactGeometry {
             t_s,
             laid_fraction: f,
             r_m: self.p.outer_radius_m * (1.0 - f).max(0.0).sqrt(),
-            // Sliding, the contact line is not the laid length (not tabulated).
-            x_m: if self.sliding {
-                f64::NAN
-            } else {
-                self.spiral.arc(psi, self.spiral.psi_out)
-            },
+            // Sliding, the contact line is not the laid length.
+            x_m: self
+                .sliding_contact_x(psi)
+                .unwrap_or_else(|| self.spiral.arc(psi, self.spiral.psi_out)),
             xdot_m_s: if self.sliding {
                 f64::NAN
             } else {

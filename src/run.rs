@@ -343,7 +343,7 @@ pub fn run_until(
         .collect();
     let mut hits: Vec<Option<MilestoneHit>> = radii.iter().map(|_| None).collect();
     let mut guard = Guard::new(scene, e0);
-    let mut limits = Applicability::new(scene, refs.exact.hop_onset_fraction());
+    let mut limits = Applicability::new(scene, &refs.exact);
     let mut status = Status::Completed;
     let mut prev_logged = false;
 
