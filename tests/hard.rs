@@ -121,7 +121,11 @@ fn a_frictionless_floor_slides_as_the_sliding_model_says() {
     let last = samples.last().unwrap();
     let laid = last.laid_fraction * uncoil::spiral::Spiral::wound(0.06, 0.005, 0.0).length();
     assert!(laid > 0.05, "laid {laid} m");
-    assert!(last.x_m < 0.5 * laid, "x = {} m with {laid} m laid", last.x_m);
+    assert!(
+        last.x_m < 0.5 * laid,
+        "x = {} m with {laid} m laid",
+        last.x_m
+    );
     assert!(
         (last.x_m - last.x_geo_m).abs() < 1e-3 * laid,
         "x = {} m, sliding model {} m",

@@ -4,8 +4,8 @@
 use crate::support::run_kept;
 use uncoil::compare::{SPIN_TURNS, sim_sign_change, spin_at_theta, window_mean};
 use uncoil::forces::{force_reference, sign_change_fraction};
-use uncoil::rivals::{Rival, rivals, spool_spins};
 use uncoil::guard::Status;
+use uncoil::rivals::{Rival, rivals, spool_spins};
 use uncoil::run::{RunReport, Sample};
 use uncoil::scene::Scene;
 
