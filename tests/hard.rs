@@ -45,11 +45,6 @@ fn shortened(name: &str, max_time_s: f64) -> String {
     out
 }
 
-fn report_of(text: &str, name: &str) -> RunReport {
-    let scene = Scene::from_toml_str(text, name).unwrap();
-    run(&scene, &mut []).unwrap()
-}
-
 fn kinds(report: &RunReport) -> Vec<LimitKind> {
     report.reference_limits.iter().map(|l| l.kind).collect()
 }
