@@ -71,6 +71,22 @@ struct Curve<'a> {
     dashed: bool,
 }
 
+/// The simulation, the exact-geometry model and eq. (7) as three curves over `t`, from the
+/// columns `[sim, exact, eq7]`.
+fn against_references<'a>(t: &[f64], columns: &[Vec<f64>; 3]) -> [Curve<'a>; 3] {
+    let curve = |label, i: usize, color, dashed| Curve {
+        label,
+        points: pairs(t, &columns[i]),
+        color,
+        dashed,
+    };
+    [
+        curve("simulation", 0, SIM, false),
+        curve("exact-geometry model", 1, EXACT, true),
+        curve("eq. (7)", 2, EQ7, true),
+    ]
+}
+
 fn line_chart(
     area: &Area<'_>,
     caption: &str,
@@ -176,26 +192,7 @@ pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
             &format!("{name}: equivalent coil radius r = R sqrt(1 - laid fraction)"),
             "t (s)",
             "r (m)",
-            &[
-                Curve {
-                    label: "simulation",
-                    points: pairs(tr, &r[0]),
-                    color: SIM,
-                    dashed: false,
-                },
-                Curve {
-                    label: "exact-geometry model",
-                    points: pairs(tr, &r[1]),
-                    color: EXACT,
-                    dashed: true,
-                },
-                Curve {
-                    label: "eq. (7)",
-                    points: pairs(tr, &r[2]),
-                    color: EQ7,
-                    dashed: true,
-                },
-            ],
+            &against_references(tr, &r),
             SeriesLabelPosition::UpperLeft,
             |_| Ok(()),
         )?;
@@ -205,26 +202,7 @@ pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
             &format!("{name}: contact-line speed x', up to the final bang"),
             "t (s)",
             "x' (m/s)",
-            &[
-                Curve {
-                    label: "simulation",
-                    points: pairs(tr, &v[0]),
-                    color: SIM,
-                    dashed: false,
-                },
-                Curve {
-                    label: "exact-geometry model",
-                    points: pairs(tr, &v[1]),
-                    color: EXACT,
-                    dashed: true,
-                },
-                Curve {
-                    label: "eq. (7)",
-                    points: pairs(tr, &v[2]),
-                    color: EQ7,
-                    dashed: true,
-                },
-            ],
+            &against_references(tr, &v),
             SeriesLabelPosition::UpperLeft,
             |_| Ok(()),
         )?;

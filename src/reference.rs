@@ -351,6 +351,8 @@ pub struct ExactGeometry {
     moments: SpiralMoments,
     line_density_kg_m: f64,
     energy_j: f64,
+    /// Sliding: the conserved horizontal moment of [`Self::sliding_moment`] at the start.
+    sliding_moment0: f64,
     traj: Trajectory,
 }
 
@@ -415,6 +417,7 @@ impl ExactGeometry {
             moments,
             line_density_kg_m,
             energy_j: 0.0,
+            sliding_moment0: 0.0,
             traj: Trajectory {
                 q0: spiral.psi_out,
                 nodes: vec![],
@@ -425,6 +428,7 @@ impl ExactGeometry {
         let pose0 = model.pose(psi0);
         model.energy_j = 0.5 * model.inertia_psi(psi0, &pose0) * psidot0 * psidot0
             + model.potential(psi0, &pose0);
+        model.sliding_moment0 = model.sliding_moment(&pose0);
         let psi_end = model.psi_at_fraction(f_end);
         let traj = Trajectory::new(psi0, psi_end, 6000, |psi| model.psidot(psi));
         model.traj = traj;
@@ -533,16 +537,16 @@ impl ExactGeometry {
     /// laid tape stays put (eqs. 100, 106 for a centred coil; here with the spiral's own
     /// off-centre mass). `None` for a rolling model, whose peel point is at the laid length.
     pub fn sliding_contact_x(&self, psi: f64) -> Option<f64> {
-        if !self.sliding {
-            return None;
-        }
-        // M x_peel + m (x_cm - s) - (M - m) s / 2 is conserved, s the laid length.
-        let moment = |psi: f64| {
-            let pose = self.pose(psi);
-            let laid_mass = self.p.mass_kg - pose.mass_kg;
-            0.5 * laid_mass * pose.laid_m - pose.mass_kg * (pose.x_cm - pose.laid_m)
-        };
-        Some((moment(psi) - moment(self.spiral.psi_out)) / self.p.mass_kg)
+        self.sliding
+            .then(|| (self.sliding_moment(&self.pose(psi)) - self.sliding_moment0) / self.p.mass_kg)
+    }
+
+    /// `(M - m) s / 2 - m (x_cm - s)`: how far the whole tape's mass lies behind the peel
+    /// point, times `M` (`s` the laid length, `m` the coil's mass, `x_cm - s` its centre
+    /// ahead of the peel point). At zero momentum `M x_peel - this` is conserved.
+    fn sliding_moment(&self, pose: &Pose) -> f64 {
+        let laid_mass = self.p.mass_kg - pose.mass_kg;
+        0.5 * laid_mass * pose.laid_m - pose.mass_kg * (pose.x_cm - pose.laid_m)
     }
 
     /// The state with the lowest point at `psi`.
