@@ -126,14 +126,16 @@ pub enum Event {
         /// Mechanical energy above the flat rest state (J).
         available_j: f64,
     },
-    /// The bang settled: the end of the run.
-    BangSettled {
+    /// The bang ended, at rest or at its cap: the end of the run.
+    BangEnd {
         /// Simulated time (s).
         t_s: f64,
         /// When the bang began (s).
         started_s: f64,
         /// Energy dissipated from the start of the bang on (J).
         dissipated_j: f64,
+        /// What ended it.
+        ended_by: crate::model::BangEnd,
     },
     /// Something a user should know about the run.
     Warning {
@@ -150,7 +152,7 @@ impl Event {
         match self {
             Event::Detach { t_s, .. }
             | Event::BangStart { t_s, .. }
-            | Event::BangSettled { t_s, .. }
+            | Event::BangEnd { t_s, .. }
             | Event::Warning { t_s, .. } => *t_s,
         }
     }

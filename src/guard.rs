@@ -50,7 +50,7 @@ pub const CONTINUUM_RADIUS_PER_THICKNESS: f64 = 3.0;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Status {
-    /// The final bang settled, or `stop.max_time_s` was reached.
+    /// The final bang ended (at rest or at its cap), or `stop.max_time_s` was reached.
     Completed,
     /// A guard stopped the run; `stop_reason` says which and why.
     Stopped,
@@ -428,7 +428,7 @@ pub fn label(kind: LimitKind) -> &'static str {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::EnergyLedger;
+    use crate::model::{BangRecord, EnergyLedger};
 
     /// The yoga mat: R = 0.06 m, b = 0.005 m.
     fn yoga() -> Scene {
@@ -454,6 +454,7 @@ mod tests {
             normal_n: 14.0,
             friction_n: 0.1,
             ledger: EnergyLedger::default(),
+            bang: BangRecord::default(),
             detached: 3,
             active_bodies: 4,
             max_joint_gap_m: 1e-5,

@@ -35,6 +35,42 @@ use serde::Serialize;
 use crate::scene::Scene;
 use crate::spiral::{Spiral, SpiralMoments, rotate};
 
+mod work;
+pub use work::BangLedger;
+
+/// What ended the final bang.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BangEnd {
+    /// The moving tape's energy above lying at rest on the floor (kinetic, plus its weight
+    /// times its height above lying flat) fell below `stop.rest_fraction` of the kinetic
+    /// energy the bang received.
+    Rest,
+    /// `stop.bang_cap_s` of simulated time passed first.
+    Cap,
+}
+
+/// The final bang as measured so far.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct BangRecord {
+    /// Simulated time of the release (s).
+    pub started_s: f64,
+    /// Kinetic energy of the tape at the release (J).
+    pub kinetic_in_j: f64,
+    /// Fastest speed of any point of the tape since the release (m/s).
+    pub top_speed_m_s: f64,
+    /// Largest floor normal force on the moving tape in one step, its normal impulse over
+    /// the step (N).
+    pub peak_floor_force_n: f64,
+    /// Normal impulse of the floor on the moving tape since the release (N s).
+    pub floor_impulse_n_s: f64,
+    /// Where the dissipated energy went, by mechanism.
+    pub ledger: BangLedger,
+    /// What ended the bang, once it has ended.
+    pub end: Option<BangEnd>,
+}
+use work::{BodyState, ChainLink};
+
 /// Where the energy went, each part measured where it happens (J).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct EnergyLedger {
@@ -92,6 +128,8 @@ pub struct Observation {
     pub friction_n: f64,
     /// The energy ledger so far.
     pub ledger: EnergyLedger,
+    /// The final bang so far (all zero before the release).
+    pub bang: BangRecord,
     /// Links that have left the coil.
     pub detached: usize,
     /// Bodies in the engine (coil and moving links).
@@ -144,18 +182,20 @@ impl Link {
             0.5 * (self.near[1] + self.far[1]),
         ]
     }
-
-    /// Angle of the chord from far to near node, in the coil frame.
-    fn angle(&self) -> f64 {
-        (self.near[1] - self.far[1]).atan2(self.near[0] - self.far[0])
-    }
 }
 
-/// A link that left the coil and is simulated as its own body.
+/// Consecutive links that left the coil together and move as one rigid body: a single
+/// link while the coil rolls; in the final bang, the remaining wound links grouped into
+/// pieces at least `solver.bang_piece_m` long. The body's frame is the coil's frame at the
+/// moment the piece left it, so its nodes are the spiral's own coordinates.
 #[derive(Debug, Clone, Copy)]
-struct FreeLink {
-    index: usize,
+struct Piece {
+    /// The links `first..=last`, from the laid end inward.
+    first: usize,
+    last: usize,
     body: RigidBodyHandle,
+    /// Height of its centre of mass when it lies flat on the floor (m).
+    rest_y_m: f64,
 }
 
 /// Running sums of the coil's mass moments in its body frame.
@@ -221,11 +261,17 @@ pub struct Model {
     spiral: Spiral,
     moments: SpiralMoments,
     links: Vec<Link>,
+    /// Each link's near and far node in the frame of the body that holds it (m): the
+    /// spiral's coordinates while it is wound or in a piece spawned from the coil, the
+    /// world's in a piece joined from moving links.
+    local: Vec<[Vector; 2]>,
     link_angle: f64,
     steps_per_link: f64,
     max_dt: f64,
     freeze_speed: f64,
     bang_step_rad: f64,
+    /// Shortest piece the remaining wound links are grouped into at the release (m).
+    bang_piece_m: f64,
     /// Softness of every joint (see `Solver::joint_hz`).
     joint_softness: SpringCoefficients<Real>,
     friction: f64,
@@ -237,7 +283,9 @@ pub struct Model {
     flat_first_moment: f64,
     half_b: f64,
     bang_fraction: f64,
-    settle_time: f64,
+    bang_iterations: usize,
+    bang_cap_s: f64,
+    rest_fraction: f64,
     total_mass: f64,
 
     ground: RigidBodyHandle,
@@ -257,16 +305,16 @@ pub struct Model {
     angle_offset: f64,
     psi_low: f64,
 
-    free: VecDeque<FreeLink>,
+    free: VecDeque<Piece>,
     frozen_potential_j: f64,
     /// Near node of each frozen link, from the outer end, and the far node of the last one
     /// (world frame, m): frozen links have no body left to ask.
     frozen_nodes: Vec<[f64; 2]>,
 
     ledger: EnergyLedger,
+    bang: BangRecord,
     phase: Phase,
     t: f64,
-    bang_started_s: f64,
     last_dt: f64,
     x_low: f64,
     chord_ratio: f64,
@@ -437,16 +485,27 @@ impl Model {
             flat_first_moment += link.mass_kg * (laid_x + 0.5 * link.length_m);
             laid_x += link.length_m;
         }
+        let local = links
+            .iter()
+            .map(|l| {
+                [
+                    Vector::new(l.near[0], l.near[1]),
+                    Vector::new(l.far[0], l.far[1]),
+                ]
+            })
+            .collect();
         let mut model = Self {
             world,
             spiral,
             moments,
             links,
+            local,
             link_angle: 2.0 * PI / f64::from(scene.links_per_turn),
             steps_per_link: scene.solver.steps_per_link,
             max_dt: scene.solver.max_dt_s,
             freeze_speed: scene.solver.freeze_speed_m_s,
             bang_step_rad: scene.solver.bang_step_rad,
+            bang_piece_m: scene.solver.bang_piece_m,
             joint_softness: SpringCoefficients::new(
                 scene.solver.joint_hz,
                 SpringCoefficients::<Real>::joint_defaults().damping_ratio,
@@ -457,7 +516,9 @@ impl Model {
             flat_first_moment,
             half_b: 0.5 * b,
             bang_fraction,
-            settle_time: scene.stop.settle_time_s,
+            bang_iterations: scene.solver.bang_iterations as usize,
+            bang_cap_s: scene.stop.bang_cap_s,
+            rest_fraction: scene.stop.rest_fraction,
             total_mass: tape.mass_kg,
             ground,
             floor,
@@ -473,9 +534,9 @@ impl Model {
             frozen_potential_j: 0.0,
             frozen_nodes: Vec::new(),
             ledger: EnergyLedger::default(),
+            bang: BangRecord::default(),
             phase: Phase::Rolling,
             t: 0.0,
-            bang_started_s: 0.0,
             last_dt: 0.0,
             x_low: 0.0,
             chord_ratio: first.chord_ratio,
@@ -572,13 +633,22 @@ impl Model {
         let dt = self.next_dt();
         self.world.integration_parameters.dt = dt;
         let before = self.energy_j;
+        let states: Vec<BodyState> = if self.phase == Phase::Bang {
+            self.free
+                .iter()
+                .map(|l| BodyState::of(&self.world.bodies[l.body]))
+                .collect()
+        } else {
+            Vec::new()
+        };
         self.world.step();
         self.t += dt;
         self.last_dt = dt;
-        let after = self.total_energy();
+        let (kinetic, potential) = self.energy();
+        let after = kinetic + potential;
         match self.phase {
             Phase::Rolling => self.ledger.step_j += before - after,
-            _ => self.ledger.bang_j += before - after,
+            _ => self.book_bang_step(&states, before - after, kinetic, dt),
         }
 
         if let Some(coil) = self.coil {
@@ -604,8 +674,8 @@ impl Model {
             }
         }
         self.freeze_settled();
-        if self.phase == Phase::Bang && self.t - self.bang_started_s >= self.settle_time {
-            self.phase = Phase::Done;
+        if self.phase == Phase::Bang && self.t - self.bang.started_s >= self.bang_cap_s {
+            self.end_bang(BangEnd::Cap);
         }
         self.observe()
     }
@@ -670,77 +740,122 @@ impl Model {
         }
     }
 
-    /// Creates the body of link `k` with the coil's velocity field.
-    fn spawn_link(&mut self, k: usize, coil: RigidBodyHandle) -> RigidBodyHandle {
-        let link = self.links[k];
+    /// Creates the body of the links `first..=last` with the coil's velocity field, in the
+    /// coil's frame.
+    fn spawn_piece(&mut self, first: usize, last: usize, coil: RigidBodyHandle) -> Piece {
+        let mut sums = CoilSums::default();
+        for link in &self.links[first..=last] {
+            sums.add(link, 1.0);
+        }
         let body = &self.world.bodies[coil];
         let pose = *body.position();
         let (linvel, angvel, com) = (body.linvel(), body.angvel(), body.center_of_mass());
-        let c = link.centre();
-        let centre = pose.transform_point(Vector::new(c[0], c[1]));
-        let r = centre - com;
-        let v = linvel + Vector::new(-angvel * r.y, angvel * r.x);
+        let mprops = sums.mass_properties();
+        let r = pose.transform_point(mprops.local_com) - com;
         let handle = self.world.insert_body(
             RigidBodyBuilder::dynamic()
-                .pose(Pose::new(centre, self.coil_angle + link.angle()))
-                .additional_mass_properties(MassProperties::new(
-                    Vector::ZERO,
-                    link.mass_kg,
-                    link.mass_kg * link.length_m * link.length_m / 12.0,
-                ))
-                .linvel(v)
+                .pose(pose)
+                .additional_mass_properties(mprops)
+                .linvel(linvel + Vector::new(-angvel * r.y, angvel * r.x))
                 .angvel(angvel)
-                .can_sleep(false),
+                .can_sleep(false)
+                .user_data(first as u128),
         );
         self.world.bodies[handle].recompute_mass_properties_from_colliders(&self.world.colliders);
-        handle
+        Piece {
+            first,
+            last,
+            body: handle,
+            rest_y_m: self.rest_height_m(first, last),
+        }
     }
 
-    /// Gives a laid link its floor contact. A link hanging from the coil needs none: its
-    /// near node rests on the previous link and its far node is carried by the coil, which
-    /// stands on its own curved contact; a collider there would touch the floor just before
-    /// the node arrives, a corner impact on every link.
-    fn lay_link(&mut self, k: usize, handle: RigidBodyHandle) {
-        if !self.world.bodies[handle].colliders().is_empty() {
+    /// How far a link's segment collider lies below its node line (m): its inset while the
+    /// coil rolls, none in the bang (see [`Self::lay_piece`]).
+    fn inset_m(&self, k: usize) -> f64 {
+        match self.phase {
+            Phase::Rolling => self.links[k].inset_m,
+            _ => 0.0,
+        }
+    }
+
+    /// Height of the centre of mass of the links `first..=last` lying flat on the floor:
+    /// each link's node line sits its collider's inset above the contact plane `y = b/2` (m).
+    fn rest_height_m(&self, first: usize, last: usize) -> f64 {
+        let mass: f64 = self.links[first..=last].iter().map(|l| l.mass_kg).sum();
+        (first..=last)
+            .map(|k| self.links[k].mass_kg * (self.half_b + self.inset_m(k)))
+            .sum::<f64>()
+            / mass
+    }
+
+    /// The piece's nodes in its body frame, from its near node inward.
+    fn piece_nodes(&self, piece: Piece) -> impl Iterator<Item = Vector> + '_ {
+        std::iter::once(self.local[piece.first][0])
+            .chain(self.local[piece.first..=piece.last].iter().map(|l| l[1]))
+    }
+
+    /// Gives a laid piece its floor contact: one segment per link. While the coil rolls a
+    /// segment lies its link's inset below the node line, so that the link lies on the
+    /// floor as the coil laid it; in the bang it lies on the node line, which a piece turned
+    /// over its pinned node would otherwise push into the floor at the pin, where neither
+    /// can give. A link hanging from the coil needs none: its near node rests on the
+    /// previous link and its far node is carried by the coil, which stands on its own curved
+    /// contact; a collider there would touch the floor just before the node arrives, a
+    /// corner impact on every link.
+    fn lay_piece(&mut self, piece: Piece) {
+        if !self.world.bodies[piece.body].colliders().is_empty() {
             return;
         }
-        let link = self.links[k];
-        let half = 0.5 * link.length_m;
-        self.world.insert_collider(
-            ColliderBuilder::segment(
-                Vector::new(-half, -link.inset_m),
-                Vector::new(half, -link.inset_m),
-            )
-            .density(0.0)
-            .friction(self.friction)
-            .collision_groups(Self::tape_groups()),
-            Some(handle),
-        );
+        for k in piece.first..=piece.last {
+            let [near, far] = self.local[k];
+            let half = 0.5 * (near - far).length();
+            let inset = self.inset_m(k);
+            self.world.insert_collider(
+                ColliderBuilder::segment(Vector::new(-half, -inset), Vector::new(half, -inset))
+                    .position(Pose::new(0.5 * (near + far), (near - far).to_angle()))
+                    .density(0.0)
+                    .friction(self.friction)
+                    .collision_groups(Self::tape_groups()),
+                Some(piece.body),
+            );
+        }
     }
 
-    /// Joins the near node of link `k` (body `body`) to whatever holds it: the previous free
-    /// link, or the world if that link is frozen, or nothing for the tape's outer end.
-    fn join_near_node(&mut self, k: usize, body: RigidBodyHandle) {
-        let half = 0.5 * self.links[k].length_m;
+    /// Joins the near node of `piece` to whatever holds it: the previous free piece, or the
+    /// world if that one is frozen, or nothing for the tape's outer end.
+    fn join_near_node(&mut self, piece: Piece) {
+        let near = self.local[piece.first][0];
         if let Some(prev) = self.free.back().copied() {
-            let prev_half = 0.5 * self.links[prev.index].length_m;
             let joint = RevoluteJointBuilder::new()
-                .local_anchor1(Vector::new(-prev_half, 0.0))
-                .local_anchor2(Vector::new(half, 0.0))
+                .local_anchor1(self.local[prev.last][1])
+                .local_anchor2(near)
                 .contacts_enabled(false)
                 .softness(self.joint_softness);
-            self.world.insert_impulse_joint(prev.body, body, joint);
-        } else if k > 0 {
-            let node = self.world.bodies[body]
-                .position()
-                .transform_point(Vector::new(half, 0.0));
-            let joint = RevoluteJointBuilder::new()
-                .local_anchor1(node)
-                .local_anchor2(Vector::new(half, 0.0))
-                .contacts_enabled(false)
-                .softness(self.joint_softness);
-            self.world.insert_impulse_joint(self.ground, body, joint);
+            self.world
+                .insert_impulse_joint(prev.body, piece.body, joint);
+        } else if piece.first > 0 {
+            self.pin_to_world(piece);
         }
+    }
+
+    /// Pins the near node of `piece` to the world where it is now. The world's body also
+    /// holds the floor, and the pin disables their contact while the coil rolls: the pinned
+    /// link lies on the floor, held there by its neighbours (with the contact as well, the
+    /// pin and the floor fight over it). In the final bang the pinned piece may swing, and
+    /// without the contact it would pass through the floor.
+    fn pin_to_world(&mut self, piece: Piece) {
+        let near = self.local[piece.first][0];
+        let node = self.world.bodies[piece.body]
+            .position()
+            .transform_point(near);
+        let joint = RevoluteJointBuilder::new()
+            .local_anchor1(node)
+            .local_anchor2(near)
+            .contacts_enabled(self.phase != Phase::Rolling)
+            .softness(self.joint_softness);
+        self.world
+            .insert_impulse_joint(self.ground, piece.body, joint);
     }
 
     /// Removes the joints between a free link and the coil.
@@ -761,31 +876,29 @@ impl Model {
         let before = self.total_energy();
         let k = self.first_attached;
         if let Some(prev) = self.free.back().copied() {
-            self.lay_link(prev.index, prev.body);
+            self.lay_piece(prev);
         }
-        let handle = self.spawn_link(k, coil);
+        let piece = self.spawn_piece(k, k, coil);
         // The previous free link was pinned to the coil at this link's near node.
         if let Some(prev) = self.free.back().copied() {
             self.unpin_from_coil(prev.body, coil);
         }
-        self.join_near_node(k, handle);
+        self.join_near_node(piece);
         if k == 0 {
             // The tape's free end has no previous link to rest on: without a floor contact
             // it would droop below the floor until laid, and be pushed out then.
-            self.lay_link(k, handle);
+            self.lay_piece(piece);
         }
-        self.free.push_back(FreeLink {
-            index: k,
-            body: handle,
-        });
+        self.free.push_back(piece);
+        // Both bodies are in the coil's frame: the far node has the same coordinates in each.
         let far = self.links[k].far;
-        let half = 0.5 * self.links[k].length_m;
+        let far = Vector::new(far[0], far[1]);
         self.world.insert_impulse_joint(
-            handle,
+            piece.body,
             coil,
             RevoluteJointBuilder::new()
-                .local_anchor1(Vector::new(-half, 0.0))
-                .local_anchor2(Vector::new(far[0], far[1]))
+                .local_anchor1(far)
+                .local_anchor2(far)
                 .contacts_enabled(false)
                 .softness(self.joint_softness),
         );
@@ -802,94 +915,278 @@ impl Model {
         self.ledger.detach_j += before - self.total_energy();
     }
 
+    /// Joins the moving links, in order along the tape, into rigid pieces at least
+    /// `bang_piece_m` long (a short remainder joins the last piece). Each piece moves with
+    /// its parts' momentum and angular momentum; the kinetic energy of their relative
+    /// motion is lost, and returned (J).
+    fn join_pieces(&mut self) -> f64 {
+        let before = self.energy().0;
+        let parts: Vec<Piece> = self.free.drain(..).collect();
+        let mut groups: Vec<std::ops::Range<usize>> = Vec::new();
+        let (mut start, mut length) = (0, 0.0);
+        for (i, p) in parts.iter().enumerate() {
+            length += self.links[p.first..=p.last]
+                .iter()
+                .map(|l| l.length_m)
+                .sum::<f64>();
+            if length >= self.bang_piece_m {
+                groups.push(start..i + 1);
+                start = i + 1;
+                length = 0.0;
+            }
+        }
+        if start < parts.len() {
+            match groups.last_mut() {
+                Some(last) => last.end = parts.len(),
+                None => groups.push(start..parts.len()),
+            }
+        }
+        for group in groups {
+            let group = &parts[group];
+            // Mass, centre of mass and momentum, then inertia and angular momentum about
+            // the centre of mass (world frame).
+            let (mut mass, mut first_moment, mut momentum) = (0.0, Vector::ZERO, Vector::ZERO);
+            for part in group {
+                let body = &self.world.bodies[part.body];
+                mass += body.mass();
+                first_moment += body.center_of_mass() * body.mass();
+                momentum += body.linvel() * body.mass();
+            }
+            let com = first_moment / mass;
+            let (mut inertia, mut spin) = (0.0, 0.0);
+            for part in group {
+                let body = &self.world.bodies[part.body];
+                let r = body.center_of_mass() - com;
+                let own = body.mass_properties().effective_angular_inertia();
+                inertia += own + body.mass() * r.length_squared();
+                spin += own * body.angvel() + body.mass() * r.perp_dot(body.linvel());
+            }
+            // The new body's frame is the world's: its nodes are where they are now.
+            for part in group {
+                let pose = *self.world.bodies[part.body].position();
+                for k in part.first..=part.last {
+                    self.local[k] = self.local[k].map(|n| pose.transform_point(n));
+                }
+                self.world.remove_body(part.body);
+            }
+            let first = group[0].first;
+            let body = self.world.insert_body(
+                RigidBodyBuilder::dynamic()
+                    .additional_mass_properties(MassProperties::new(com, mass, inertia))
+                    .linvel(momentum / mass)
+                    .angvel(spin / inertia)
+                    .can_sleep(false)
+                    .user_data(first as u128),
+            );
+            self.world.bodies[body].recompute_mass_properties_from_colliders(&self.world.colliders);
+            let last = group[group.len() - 1].last;
+            let piece = Piece {
+                first,
+                last,
+                body,
+                rest_y_m: self.rest_height_m(first, last),
+            };
+            self.join_near_node(piece);
+            self.lay_piece(piece);
+            self.free.push_back(piece);
+        }
+        before - self.energy().0
+    }
+
     /// Releases the remaining wound links as a free chain: the final bang begins.
     fn release_coil(&mut self) {
         let Some(coil) = self.coil else { return };
-        let before = self.total_energy();
-        // Stiff joints hold the rolling chain to its geometry; in the bang, with links
-        // turning by up to `bang_step_rad` a step, their full position correction pumps
-        // energy in (the yoga mat's rose 74 % above E0 at 0.1 rad a step). The bang gets the
-        // engine's default joints.
-        self.joint_softness = SpringCoefficients::joint_defaults();
-        for (_, joint) in self.world.impulse_joints.iter_mut() {
-            let _ = joint.data.set_softness(self.joint_softness);
+        let (kinetic_in, potential_in) = self.energy();
+        let before = kinetic_in + potential_in;
+        self.phase = Phase::Bang;
+        if let Some(prev) = self.free.back().copied() {
+            self.unpin_from_coil(prev.body, coil);
+        }
+        // The piece pinned to the world may swing in the bang: let it touch the floor.
+        if let Some(first) = self.free.front().copied() {
+            let pins: Vec<_> = self
+                .world
+                .impulse_joints
+                .joints_between(self.ground, first.body)
+                .map(|(h, _)| h)
+                .collect();
+            for h in pins {
+                if let Some(j) = self.world.impulse_joints.get_mut(h, false) {
+                    j.data.set_contacts_enabled(true);
+                }
+            }
         }
         for k in self.first_attached..self.links.len() {
-            let handle = self.spawn_link(k, coil);
-            if k == self.first_attached
-                && let Some(prev) = self.free.back().copied()
-            {
-                self.unpin_from_coil(prev.body, coil);
-            }
-            self.join_near_node(k, handle);
-            self.free.push_back(FreeLink {
-                index: k,
-                body: handle,
-            });
-        }
-        for link in self.free.clone() {
-            self.lay_link(link.index, link.body);
+            let piece = self.spawn_piece(k, k, coil);
+            self.join_near_node(piece);
+            self.free.push_back(piece);
         }
         self.world.remove_body(coil);
         self.coil = None;
         self.coil_ball = None;
         self.first_attached = self.links.len();
-        self.phase = Phase::Bang;
-        self.bang_started_s = self.t;
-        // Spawning copies the velocity field, so this is zero up to rounding.
-        self.ledger.bang_j += before - self.total_energy();
+        // The engine leaves the joints a few microns apart under tension; closing those gaps
+        // later, under the bang's far larger tension, would do work on the tape. Close them
+        // now, by position alone, then join the links into the bang's pieces.
+        self.close_gaps();
+        let joined_j = self.join_pieces();
+        self.bang.ledger.freeze_j += joined_j;
+        self.world.integration_parameters.num_solver_iterations = self.bang_iterations;
+        let (kinetic, potential) = self.energy();
+        self.bang.started_s = self.t;
+        self.bang.kinetic_in_j = kinetic_in;
+        // Spawning copies the velocity field, so this is the joining's loss, but for closing
+        // the gaps, which moves the links by microns.
+        let release_j = before - kinetic - potential;
+        self.ledger.bang_j += release_j;
+        self.bang.ledger.residual_j += release_j - joined_j;
     }
 
-    /// Freezes settled links from the laid end: a link whose two nodes move slower than the
-    /// freeze speed and that is not holding the coil is removed from the engine.
+    /// Freezes settled pieces from the laid end: a piece whose nodes all move slower than
+    /// the freeze speed and that is not holding the coil is removed from the engine.
     fn freeze_settled(&mut self) {
         let min_free = usize::from(self.coil.is_some());
         while self.free.len() > min_free {
             let oldest = self.free[0];
             let body = &self.world.bodies[oldest.body];
-            let half = 0.5 * self.links[oldest.index].length_m;
-            let pose = body.position();
-            let fastest = [half, -half]
-                .into_iter()
-                .map(|s| {
-                    body.velocity_at_point(pose.transform_point(Vector::new(s, 0.0)))
-                        .length()
-                })
+            let pose = *body.position();
+            let nodes: Vec<Vector> = self
+                .piece_nodes(oldest)
+                .map(|n| pose.transform_point(n))
+                .collect();
+            let fastest = nodes
+                .iter()
+                .map(|&p| body.velocity_at_point(p).length())
                 .fold(0.0, f64::max);
             if fastest >= self.freeze_speed {
                 break;
             }
             let kinetic = body.kinetic_energy();
             self.frozen_potential_j += self.potential_of(body);
-            let [near, far] = [half, -half].map(|s| {
-                let p = pose.transform_point(Vector::new(s, 0.0));
-                [p.x, p.y]
-            });
-            // The last entry was the previous frozen link's far node: this link's near node.
+            // The last entry was the previous frozen piece's far node: this one's near node.
             self.frozen_nodes.pop();
-            self.frozen_nodes.extend([near, far]);
+            self.frozen_nodes.extend(nodes.iter().map(|p| [p.x, p.y]));
             self.world.remove_body(oldest.body);
             self.free.pop_front();
+            // Pin the next piece where its near node is now, not where the frozen piece's
+            // far node was: a joint stretched by tension would otherwise hand its stretch to
+            // the anchor at every freeze, and the laid tape would creep.
             if let Some(next) = self.free.front().copied() {
-                let next_half = 0.5 * self.links[next.index].length_m;
-                // Pin the next link where its near node is now, not where the frozen link's
-                // far node was: a joint stretched by tension would otherwise hand its
-                // stretch to the anchor at every freeze, and the laid tape would creep.
-                let node = self.world.bodies[next.body]
-                    .position()
-                    .transform_point(Vector::new(next_half, 0.0));
-                let joint = RevoluteJointBuilder::new()
-                    .local_anchor1(node)
-                    .local_anchor2(Vector::new(next_half, 0.0))
-                    .contacts_enabled(false)
-                    .softness(self.joint_softness);
-                self.world
-                    .insert_impulse_joint(self.ground, next.body, joint);
+                self.pin_to_world(next);
             }
             match self.phase {
                 Phase::Rolling => self.ledger.freeze_j += kinetic,
-                _ => self.ledger.bang_j += kinetic,
+                _ => {
+                    self.ledger.bang_j += kinetic;
+                    self.bang.ledger.freeze_j += kinetic;
+                }
             }
+        }
+    }
+
+    /// Books one step of the final bang: the work of the floor and the joints on the moving
+    /// pieces (from their states `before` it, in the order of `free`) into the bang's ledger,
+    /// with `lost_j` what the step dissipated and `kinetic` the kinetic energy after it; the
+    /// fastest point, the floor's impulse; and ends the bang once it has come to rest.
+    fn book_bang_step(&mut self, before: &[BodyState], lost_j: f64, kinetic: f64, dt: f64) {
+        self.ledger.bang_j += lost_j;
+        let Some(first) = self.free.front() else {
+            // Everything is frozen: at rest.
+            self.bang.ledger.residual_j += lost_j;
+            self.end_bang(BangEnd::Rest);
+            return;
+        };
+        let links: Vec<ChainLink<'_>> = self
+            .free
+            .iter()
+            .zip(before)
+            .map(|(p, &before)| {
+                let body = &self.world.bodies[p.body];
+                // Anchors from the centre of mass, in the body's axes.
+                let com = body.mass_properties().local_mprops.local_com;
+                ChainLink {
+                    body,
+                    before,
+                    near: self.local[p.first][0] - com,
+                    far: self.local[p.last][1] - com,
+                }
+            })
+            .collect();
+        let floor: Vec<_> =
+            work::floor_impulses(&self.world.narrow_phase, &self.world.colliders, self.floor)
+                .filter_map(|c| {
+                    #[allow(clippy::cast_possible_truncation)]
+                    let k = self.world.bodies.get(c.body)?.user_data as usize;
+                    let i = self.free.binary_search_by_key(&k, |p| p.first).ok()?;
+                    Some((i, c))
+                })
+                .collect();
+        let work = work::step_work(&links, first.first > 0, &floor, self.world.gravity, dt);
+        let impulse: f64 = floor.iter().map(|(_, c)| c.normal.length()).sum();
+        // Potential energy above lying flat on the floor: the weight across the floor times
+        // the centre of mass's height above where it would lie (never negative: on a fixed
+        // axis the tape hangs far above a floor it cannot reach).
+        let raised_j: f64 = self
+            .free
+            .iter()
+            .map(|p| {
+                let body = &self.world.bodies[p.body];
+                body.mass() * self.g * (body.center_of_mass().y - p.rest_y_m).max(0.0)
+            })
+            .sum();
+        let top_speed = self
+            .free
+            .iter()
+            .flat_map(|&p| {
+                let body = &self.world.bodies[p.body];
+                let pose = *body.position();
+                self.piece_nodes(p)
+                    .map(move |n| body.velocity_at_point(pose.transform_point(n)).length())
+            })
+            .fold(0.0, f64::max);
+
+        let b = &mut self.bang;
+        b.ledger.floor_normal_j -= work.normal_j;
+        b.ledger.floor_friction_j -= work.friction_j;
+        b.ledger.joints_j -= work.joints_j;
+        b.ledger.residual_j += lost_j + work.normal_j + work.friction_j + work.joints_j;
+        b.top_speed_m_s = b.top_speed_m_s.max(top_speed);
+        b.floor_impulse_n_s += impulse;
+        if dt > 0.0 {
+            b.peak_floor_force_n = b.peak_floor_force_n.max(impulse / dt);
+        }
+        if kinetic + raised_j < self.rest_fraction * b.kinetic_in_j {
+            self.end_bang(BangEnd::Rest);
+        }
+    }
+
+    /// Ends the final bang: nothing more is simulated.
+    fn end_bang(&mut self, why: BangEnd) {
+        self.bang.end = Some(why);
+        self.phase = Phase::Done;
+    }
+
+    /// Closes the joints' gaps along the chain by translating each piece, from the laid end
+    /// on, so that its near node meets what holds it; velocities are untouched.
+    fn close_gaps(&mut self) {
+        // The first piece meets the world pin's anchor, if it has one.
+        let mut target: Option<Vector> = self.free.front().and_then(|first| {
+            self.world
+                .impulse_joints
+                .joints_between(self.ground, first.body)
+                .map(|(_, j)| j.data.local_anchor1())
+                .last()
+        });
+        for i in 0..self.free.len() {
+            let piece = self.free[i];
+            let [near, far] = [self.local[piece.first][0], self.local[piece.last][1]];
+            let body = &mut self.world.bodies[piece.body];
+            let pose = *body.position();
+            if let Some(t) = target {
+                let d = t - pose.transform_point(near);
+                body.set_translation(pose.translation + d, false);
+            }
+            target = Some(body.position().transform_point(far));
         }
     }
 
@@ -967,6 +1264,7 @@ impl Model {
             normal_n,
             friction_n,
             ledger: self.ledger,
+            bang: self.bang,
             detached: self.first_attached,
             active_bodies: self.world.bodies.len() - 1,
             max_joint_gap_m: self.max_joint_gap(),
@@ -982,22 +1280,17 @@ impl Model {
     /// one link; either list is empty when it has no link.
     pub fn link_nodes(&self) -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
         let mut off = self.frozen_nodes.clone();
-        for (i, link) in self.free.iter().enumerate() {
-            let half = 0.5 * self.links[link.index].length_m;
-            let pose = self.world.bodies[link.body].position();
-            let ends: &[f64] = if i + 1 == self.free.len() {
-                &[half, -half]
-            } else {
-                &[half]
-            };
+        for (i, &piece) in self.free.iter().enumerate() {
             if i == 0 {
-                // The first moving link's near node replaces the last frozen far node.
+                // The first moving piece's near node replaces the last frozen far node.
                 off.pop();
             }
-            off.extend(ends.iter().map(|&s| {
-                let p = pose.transform_point(Vector::new(s, 0.0));
-                [p.x, p.y]
-            }));
+            let pose = self.world.bodies[piece.body].position();
+            let nodes = self.piece_nodes(piece).map(|n| pose.transform_point(n));
+            // Each piece's far node is the next one's near node.
+            let skip_far = usize::from(i + 1 < self.free.len());
+            let count = piece.last - piece.first + 2 - skip_far;
+            off.extend(nodes.take(count).map(|p| [p.x, p.y]));
         }
         let mut wound = Vec::new();
         if let Some(coil) = self.coil {
@@ -1014,6 +1307,26 @@ impl Model {
             }));
         }
         (off, wound)
+    }
+
+    /// Where the tape's free (inner) end is: x of its innermost node (m).
+    pub fn tape_end_x_m(&self) -> f64 {
+        if let Some(&piece) = self.free.back() {
+            let pose = self.world.bodies[piece.body].position();
+            return pose.transform_point(self.local[piece.last][1]).x;
+        }
+        if self.coil.is_none()
+            && let Some(n) = self.frozen_nodes.last()
+        {
+            return n[0];
+        }
+        let (_, wound) = self.link_nodes();
+        wound.last().map_or(0.0, |n| n[0])
+    }
+
+    /// The tape's midline length as the links lay it: the sum of their lengths (m).
+    pub fn tape_length_m(&self) -> f64 {
+        self.links.iter().map(|l| l.length_m).sum()
     }
 
     /// Potential energy of the tape lying flat, midline at `b/2`, from `x = 0` on (J).

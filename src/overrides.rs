@@ -208,13 +208,13 @@ mod tests {
                 ov("discretisation.links_per_turn=16"),
                 ov("solver.max_dt_s=5e-4"),
                 ov("contact.model=spiral"),
-                ov("stop.settle_time_s = 0"),
+                ov("stop.bang_cap_s = 0"),
             ],
         )
         .unwrap();
         assert_eq!(s.links_per_turn, 16);
         assert!((s.solver.max_dt_s - 5e-4).abs() < 1e-18);
-        assert!(s.stop.settle_time_s.abs() < 1e-18);
+        assert!(s.stop.bang_cap_s.abs() < 1e-18);
         assert!(s.source_text.starts_with(YOGA));
         assert!(
             s.source_text

@@ -10,7 +10,7 @@ use serde::Serialize;
 use crate::forces::{ForceFn, force_reference};
 use crate::frame::{Event, Frame, GhostDisc, GhostSpiral};
 use crate::guard::{Applicability, Bounds, Guard, ReferenceLimit, Status};
-use crate::model::{EnergyLedger, Model, Observation, Phase};
+use crate::model::{BangEnd, EnergyLedger, Model, Observation, Phase};
 use crate::reference::{Continuum, ExactGeometry, ForceTorque, Params};
 use crate::rivals::{Rival, SpoolGeometry, rivals};
 use crate::scene::Scene;
@@ -48,6 +48,17 @@ pub struct Sample {
     pub lost_freeze_j: f64,
     /// Loss since the final bang began (J).
     pub lost_bang_j: f64,
+    /// Final bang: dissipated against the floor's normal impulses so far (J).
+    pub bang_floor_normal_j: f64,
+    /// Final bang: dissipated against the floor's friction impulses so far (J).
+    pub bang_floor_friction_j: f64,
+    /// Final bang: dissipated against the joint impulses so far, numerical (J).
+    pub bang_joints_j: f64,
+    /// Final bang: kinetic energy the model discarded so far, joining the links into pieces
+    /// at the release and freezing pieces at rest (J).
+    pub bang_freeze_j: f64,
+    /// Final bang: dissipated but not explained by the parts above, numerical (J).
+    pub bang_residual_j: f64,
     /// Eq. (7): coil radius at this time (m).
     pub r_ref_m: f64,
     /// Eq. (7): contact position (m).
@@ -136,6 +147,10 @@ pub struct Ledger {
     pub e0_j: f64,
     /// `M g R`, the potential energy the paradox is about (J).
     pub mgr_j: f64,
+    /// The energy scale the run's percentages are taken against: the largest of |E0|,
+    /// `M g R` and the kinetic energy carried into the bang (J). E0 alone is no scale: a
+    /// tape hanging from an axis starts with E0 ~ 0.
+    pub energy_scale_j: f64,
     /// Potential energy of the tape lying flat, midline at `b/2` (J).
     pub flat_potential_j: f64,
     /// Energy lost before the final bang, by where it was lost.
@@ -148,10 +163,38 @@ pub struct Ledger {
     pub available_at_bang_j: f64,
     /// Dissipated during the bang, as measured (J).
     pub dissipated_by_bang_j: f64,
+    /// What the bang dissipated, by mechanism (J).
+    pub bang: crate::model::BangLedger,
     /// Left at the end: kinetic plus potential above the flat rest state (J).
     pub left_j: f64,
     /// Time the bang began (s).
     pub bang_time_s: Option<f64>,
+}
+
+/// The final bang: what it received, how violent it was, how long it took, where the tape
+/// ended.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BangReport {
+    /// Kinetic energy of the tape at the release (J).
+    pub kinetic_in_j: f64,
+    /// Fastest speed of any point of the tape during the bang (m/s).
+    pub top_speed_m_s: f64,
+    /// Simulated time from the release to the end of the bang (s).
+    pub duration_s: f64,
+    /// Largest floor normal force on the moving tape, its normal impulse over one step (N).
+    pub peak_floor_force_n: f64,
+    /// Normal impulse of the floor on the moving tape during the bang (N s).
+    pub floor_impulse_n_s: f64,
+    /// Where the tape's free (inner) end lies at the end (m, along the floor from the
+    /// start of the tape).
+    pub end_x_m: f64,
+    /// The tape's midline length: where a tape laid flat would end (m).
+    pub laid_length_m: f64,
+    /// Kinetic energy still moving at the end (J).
+    pub still_moving_j: f64,
+    /// What ended the bang; `None` if the run stopped first (guard, `stop.max_time_s`,
+    /// interrupted).
+    pub ended_by: Option<BangEnd>,
 }
 
 /// Everything a run produced, for JSON and the summary.
@@ -175,8 +218,8 @@ pub struct RunReport {
     pub stop_reason: String,
     /// The guards' bounds the run was held to.
     pub bounds: Bounds,
-    /// Largest rise of the total energy above E0 over the run, over the scene's energy scale
-    /// (see [`crate::guard::ENERGY_RISE_TOLERANCE`]; 0 if it never rose).
+    /// Largest rise of the total energy above E0 over the run, over the energy scale
+    /// ([`Ledger::energy_scale_j`]; 0 if it never rose).
     pub max_energy_rise_rel: f64,
     /// Fastest spin of any body over the run (rad/s).
     pub max_spin_rad_s: f64,
@@ -186,6 +229,8 @@ pub struct RunReport {
     pub milestones: Vec<Milestone>,
     /// The energy ledger.
     pub ledger: Ledger,
+    /// The final bang's observables, if it began.
+    pub bang: Option<BangReport>,
     /// Laid fraction from which the exact-geometry model needs a floor that pulls.
     pub geo_hop_fraction: Option<f64>,
     /// Largest joint separation seen (m).
@@ -450,10 +495,11 @@ pub fn run_until(
         let interrupted = stop.load(Ordering::Relaxed);
         let last_step = done || timed_out || interrupted || tripped.is_some();
         if done {
-            events.push(Event::BangSettled {
+            events.push(Event::BangEnd {
                 t_s: obs.t_s,
                 started_s: bang.map_or(obs.t_s, |(t, _)| t),
                 dissipated_j: obs.ledger.bang_j,
+                ended_by: obs.bang.end.unwrap_or(BangEnd::Cap),
             });
         } else if let Some(reason) = &tripped {
             events.push(Event::Warning {
@@ -464,7 +510,7 @@ pub fn run_until(
             events.push(Event::Warning {
                 t_s: obs.t_s,
                 message: format!(
-                    "stop.max_time_s = {} reached before the bang settled",
+                    "stop.max_time_s = {} reached before the bang ended",
                     scene.stop.max_time_s
                 ),
             });
@@ -511,7 +557,19 @@ pub fn run_until(
             break;
         }
         if done {
-            stop_reason = "the final bang settled (stop.settle_time_s)".to_string();
+            let moving = 100.0 * obs.kinetic_j / obs.bang.kinetic_in_j.max(f64::MIN_POSITIVE);
+            stop_reason = match obs.bang.end {
+                Some(BangEnd::Rest) => format!(
+                    "the final bang came to rest: {moving:.3} % of the kinetic energy it \
+                     received still moving (stop.rest_fraction = {})",
+                    scene.stop.rest_fraction
+                ),
+                _ => format!(
+                    "the final bang reached its cap, stop.bang_cap_s = {} s, with {moving:.3} % \
+                     of the kinetic energy it received still moving",
+                    scene.stop.bang_cap_s
+                ),
+            };
             break;
         }
         if timed_out {
@@ -530,7 +588,7 @@ pub fn run_until(
         Some((t, o)) => (
             Some(t),
             o.ledger,
-            o.kinetic_j,
+            last.bang.kinetic_in_j,
             o.kinetic_j + o.potential_j - flat,
         ),
         None => (
@@ -540,15 +598,18 @@ pub fn run_until(
             last.kinetic_j + last.potential_j - flat,
         ),
     };
+    let mgr_j = scene.tape.mass_kg * scene.g_m_s2 * big_r;
     let ledger = Ledger {
         e0_j: e0,
-        mgr_j: scene.tape.mass_kg * scene.g_m_s2 * big_r,
+        mgr_j,
+        energy_scale_j: e0.abs().max(mgr_j).max(kinetic_into),
         flat_potential_j: flat,
         before_bang: before,
         lost_before_bang_j: before.total_j(),
         kinetic_into_bang_j: kinetic_into,
         available_at_bang_j: available,
         dissipated_by_bang_j: last.ledger.bang_j,
+        bang: last.bang.ledger,
         left_j: last.kinetic_j + last.potential_j - flat,
         bang_time_s: bang_time,
     };
@@ -590,12 +651,22 @@ pub fn run_until(
         status,
         stop_reason,
         bounds: guard.bounds,
-        max_energy_rise_rel: guard.max_energy_rise_j * crate::guard::ENERGY_RISE_TOLERANCE
-            / guard.bounds.energy_rise_j,
+        max_energy_rise_rel: guard.max_energy_rise_j / ledger.energy_scale_j,
         max_spin_rad_s: guard.max_spin_rad_s,
         reference_limits: limits.finish(),
         milestones,
         ledger,
+        bang: bang.map(|_| BangReport {
+            kinetic_in_j: last.bang.kinetic_in_j,
+            top_speed_m_s: last.bang.top_speed_m_s,
+            duration_s: last.t_s - last.bang.started_s,
+            peak_floor_force_n: last.bang.peak_floor_force_n,
+            floor_impulse_n_s: last.bang.floor_impulse_n_s,
+            end_x_m: model.tape_end_x_m(),
+            laid_length_m: model.tape_length_m(),
+            still_moving_j: last.kinetic_j,
+            ended_by: last.bang.end,
+        }),
         geo_hop_fraction: refs.exact.hop_onset_fraction(),
         max_joint_gap_m: max_gap,
         max_penetration_m: max_pen,
@@ -655,6 +726,11 @@ fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &References) -> Samp
         lost_detach_j: obs.ledger.detach_j,
         lost_freeze_j: obs.ledger.freeze_j,
         lost_bang_j: obs.ledger.bang_j,
+        bang_floor_normal_j: obs.bang.ledger.floor_normal_j,
+        bang_floor_friction_j: obs.bang.ledger.floor_friction_j,
+        bang_joints_j: obs.bang.ledger.joints_j,
+        bang_freeze_j: obs.bang.ledger.freeze_j,
+        bang_residual_j: obs.bang.ledger.residual_j,
         r_ref_m: r_ref,
         x_ref_m: c.map_or(nan, |s| s.x_m),
         xdot_ref_m_s: c.map_or(nan, |s| s.xdot_m_s),

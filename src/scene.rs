@@ -36,8 +36,12 @@ const DEFAULT_CONTACT_HZ: f64 = 1.0e4;
 const DEFAULT_JOINT_HZ: f64 = 1.0e7;
 /// Default `stop.max_time_s`.
 const DEFAULT_MAX_TIME_S: f64 = 60.0;
-/// Default `stop.settle_time_s`.
-const DEFAULT_SETTLE_TIME_S: f64 = 0.05;
+/// Default `solver.bang_iterations`.
+const DEFAULT_BANG_ITERATIONS: i64 = 16;
+/// Default `stop.bang_cap_s`.
+const DEFAULT_BANG_CAP_S: f64 = 2.0;
+/// Default `stop.rest_fraction`.
+const DEFAULT_REST_FRACTION: f64 = 0.001;
 /// Default `output.sample_interval_s`.
 const DEFAULT_SAMPLE_INTERVAL_S: f64 = 0.001;
 /// Default `output.scene_rate_hz`: 100 drawings per simulated second, enough to watch the
@@ -139,6 +143,15 @@ pub struct Solver {
     /// In the final bang, the largest rotation of any body in one step, rad (default: 0.05).
     /// No link is shed there, so the rolling rule (`steps_per_link`) no longer applies.
     pub bang_step_rad: f64,
+    /// Rapier solver iterations per step in the final bang, count (default: 16). Its impacts
+    /// must travel along the chain within a step: with too few, the joints give way and
+    /// absorb part of each impact.
+    pub bang_iterations: u32,
+    /// Shortest rigid piece the remaining wound links are joined into when the final bang
+    /// begins, m (default: `tape.thickness_m`; 0 keeps every link its own body). A tape is
+    /// the flexible midline the model assumes only on scales longer than its thickness; the
+    /// innermost links are far shorter, and would only add spin the step must resolve.
+    pub bang_piece_m: f64,
     /// Natural frequency of the engine's soft floor contact, Hz (default: 1e4). The coil
     /// rests on it as on a damped spring and sinks g / (2 pi f)^2 into the floor: rapier's
     /// 60 Hz lets it sink 69 um, and that sinking is lost energy.
@@ -159,8 +172,13 @@ pub struct Stop {
     pub bang_radius_m: f64,
     /// Hard stop on simulated time, s (default: 60.0).
     pub max_time_s: f64,
-    /// Simulated time given to the final bang to settle, s (default: 0.05).
-    pub settle_time_s: f64,
+    /// The longest simulated time the final bang may take, s (default: 2.0); 0 ends the run
+    /// at the release.
+    pub bang_cap_s: f64,
+    /// The final bang has come to rest, and the run ends, once the kinetic energy of the
+    /// moving tape is below this fraction of the kinetic energy it carried into the bang and
+    /// every moving piece touches the floor, dimensionless (default: 0.001).
+    pub rest_fraction: f64,
 }
 
 /// A validated scene: every value is finite and within its documented range.
@@ -312,6 +330,9 @@ struct SolverFile {
     iterations: i64,
     freeze_speed_m_s: f64,
     bang_step_rad: f64,
+    bang_iterations: i64,
+    /// `None` means "the tape's thickness" (see [`Solver::bang_piece_m`]).
+    bang_piece_m: Option<f64>,
     contact_hz: f64,
     joint_hz: f64,
 }
@@ -324,6 +345,8 @@ impl Default for SolverFile {
             iterations: DEFAULT_ITERATIONS,
             freeze_speed_m_s: DEFAULT_FREEZE_SPEED_M_S,
             bang_step_rad: DEFAULT_BANG_STEP_RAD,
+            bang_iterations: DEFAULT_BANG_ITERATIONS,
+            bang_piece_m: None,
             contact_hz: DEFAULT_CONTACT_HZ,
             joint_hz: DEFAULT_JOINT_HZ,
         }
@@ -342,7 +365,8 @@ struct StopFile {
     /// `None` means "derive from the tape" (see [`Stop::bang_radius_m`]).
     bang_radius_m: Option<f64>,
     max_time_s: f64,
-    settle_time_s: f64,
+    bang_cap_s: f64,
+    rest_fraction: f64,
 }
 
 impl Default for StopFile {
@@ -350,7 +374,8 @@ impl Default for StopFile {
         Self {
             bang_radius_m: None,
             max_time_s: DEFAULT_MAX_TIME_S,
-            settle_time_s: DEFAULT_SETTLE_TIME_S,
+            bang_cap_s: DEFAULT_BANG_CAP_S,
+            rest_fraction: DEFAULT_REST_FRACTION,
         }
     }
 }
@@ -625,6 +650,17 @@ impl Scene {
                 s.bang_step_rad > 0.0 && s.bang_step_rad <= 1.0,
                 "must be > 0 and <= 1",
             )?,
+            bang_iterations: check_int(
+                "solver.bang_iterations",
+                s.bang_iterations,
+                &ITERATIONS_RANGE,
+            )?,
+            bang_piece_m: check(
+                "solver.bang_piece_m",
+                s.bang_piece_m.unwrap_or(b),
+                s.bang_piece_m.unwrap_or(b) >= 0.0,
+                "must be >= 0",
+            )?,
             contact_hz: check(
                 "solver.contact_hz",
                 s.contact_hz,
@@ -667,11 +703,17 @@ impl Scene {
                 st.max_time_s > 0.0 && st.max_time_s <= MAX_MAX_TIME_S,
                 format!("must be > 0 and <= {MAX_MAX_TIME_S}"),
             )?,
-            settle_time_s: check(
-                "stop.settle_time_s",
-                st.settle_time_s,
-                st.settle_time_s >= 0.0,
+            bang_cap_s: check(
+                "stop.bang_cap_s",
+                st.bang_cap_s,
+                st.bang_cap_s >= 0.0,
                 "must be >= 0",
+            )?,
+            rest_fraction: check(
+                "stop.rest_fraction",
+                st.rest_fraction,
+                st.rest_fraction > 0.0 && st.rest_fraction < 1.0,
+                "must be > 0 and < 1",
             )?,
         };
 
@@ -799,7 +841,8 @@ contact_speed_m_s = 0.3
         assert_relative_eq!(s.stop.bang_radius_m, 0.005);
         assert_relative_eq!(s.stop.max_time_s, 60.0);
         assert_relative_eq!(s.scene_rate_hz, 100.0);
-        assert_relative_eq!(s.stop.settle_time_s, 0.05);
+        assert_relative_eq!(s.stop.bang_cap_s, 2.0);
+        assert_relative_eq!(s.stop.rest_fraction, 0.001);
         assert_relative_eq!(s.sample_interval_s, 0.001);
         assert!(s.source_text.contains("[tape]"));
     }
@@ -823,7 +866,8 @@ contact_speed_m_s = 0.3
         assert_eq!(s.contact_model, ContactModel::Spiral);
         assert_relative_eq!(s.stop.bang_radius_m, 0.0002);
         assert_relative_eq!(s.stop.max_time_s, 60.0);
-        assert_relative_eq!(s.stop.settle_time_s, 0.003);
+        assert_relative_eq!(s.stop.bang_cap_s, 2.0);
+        assert_relative_eq!(s.solver.bang_piece_m, 0.0001);
         assert_relative_eq!(s.sample_interval_s, 0.001);
     }
 
@@ -878,7 +922,8 @@ contact_speed_m_s = 0.3
         assert_eq!(s.contact_model, ContactModel::Spiral);
         assert_relative_eq!(s.stop.bang_radius_m, 2.0 * 0.005);
         assert_relative_eq!(s.stop.max_time_s, 60.0);
-        assert_relative_eq!(s.stop.settle_time_s, 0.05);
+        assert_relative_eq!(s.stop.bang_cap_s, 2.0);
+        assert_relative_eq!(s.stop.rest_fraction, 0.001);
         assert_relative_eq!(s.sample_interval_s, 0.001);
         assert_eq!(s.source_text, MINIMAL);
     }
@@ -959,11 +1004,13 @@ contact_speed_m_s = 0.3
             ("solver", "steps_per_link"),
             ("solver", "freeze_speed_m_s"),
             ("solver", "bang_step_rad"),
+            ("solver", "bang_piece_m"),
             ("solver", "contact_hz"),
             ("solver", "joint_hz"),
             ("stop", "bang_radius_m"),
             ("stop", "max_time_s"),
-            ("stop", "settle_time_s"),
+            ("stop", "bang_cap_s"),
+            ("stop", "rest_fraction"),
             ("output", "sample_interval_s"),
             ("output", "scene_rate_hz"),
         ] {
@@ -1015,7 +1062,12 @@ contact_speed_m_s = 0.3
             ("stop", "bang_radius_m", "0.0"),
             ("stop", "bang_radius_m", "0.06"),
             ("stop", "max_time_s", "0.0"),
-            ("stop", "settle_time_s", "-0.01"),
+            ("stop", "bang_cap_s", "-0.01"),
+            ("stop", "rest_fraction", "0.0"),
+            ("stop", "rest_fraction", "1.0"),
+            ("solver", "bang_piece_m", "-0.001"),
+            ("solver", "bang_iterations", "0"),
+            ("solver", "bang_iterations", "1001"),
             ("output", "sample_interval_s", "-0.001"),
             ("tape", "outer_radius_m", "100.1"),
             ("tape", "outer_radius_m", "0.0009"),
@@ -1045,7 +1097,9 @@ contact_speed_m_s = 0.3
             ("solver", "iterations", "1"),
             ("solver", "iterations", "1000"),
             ("solver", "freeze_speed_m_s", "0.0"),
-            ("stop", "settle_time_s", "0.0"),
+            ("stop", "bang_cap_s", "0.0"),
+            ("solver", "bang_piece_m", "0.0"),
+            ("solver", "bang_iterations", "1"),
             ("output", "sample_interval_s", "0.0"),
             ("output", "scene_rate_hz", "0.0"),
         ] {

@@ -27,7 +27,7 @@ const KEYS: &[&str] = &[
     "solver.freeze_speed_m_s",
     "stop.bang_radius_m",
     "stop.max_time_s",
-    "stop.settle_time_s",
+    "stop.bang_cap_s",
     "output.sample_interval_s",
 ];
 
@@ -69,7 +69,9 @@ fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
         s.solver.freeze_speed_m_s,
         s.stop.bang_radius_m,
         s.stop.max_time_s,
-        s.stop.settle_time_s,
+        s.stop.bang_cap_s,
+        s.stop.rest_fraction,
+        s.solver.bang_piece_m,
         s.sample_interval_s,
     ];
     prop_assert!(
@@ -97,7 +99,10 @@ fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
     prop_assert!(s.solver.freeze_speed_m_s >= 0.0);
     prop_assert!(core < s.stop.bang_radius_m && s.stop.bang_radius_m < r);
     prop_assert!(s.stop.max_time_s > 0.0 && s.stop.max_time_s <= 1e4);
-    prop_assert!(s.stop.settle_time_s >= 0.0 && s.sample_interval_s >= 0.0);
+    prop_assert!(s.stop.bang_cap_s >= 0.0 && s.sample_interval_s >= 0.0);
+    prop_assert!(s.stop.rest_fraction > 0.0 && s.stop.rest_fraction < 1.0);
+    prop_assert!(s.solver.bang_piece_m >= 0.0);
+    prop_assert!((1..=1000).contains(&s.solver.bang_iterations));
     prop_assert!(!s.name.trim().is_empty());
     // The geometry the model builds from it is finite and has at least one link per turn.
     let spiral = Spiral::wound(r, b, core);
@@ -166,7 +171,7 @@ fn scene_text() -> impl Strategy<Value = String> {
             ("solver", "freeze_speed_m_s", &f[9]),
             ("stop", "bang_radius_m", &f[10]),
             ("stop", "max_time_s", &f[11]),
-            ("stop", "settle_time_s", &f[12]),
+            ("stop", "bang_cap_s", &f[12]),
             ("output", "sample_interval_s", &f[13]),
         ];
         let mut text = String::new();

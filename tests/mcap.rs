@@ -205,7 +205,7 @@ fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
         );
     }
 
-    // Events: every link that left the rolling coil, one bang start, one settled bang whose
+    // Events: every link that left the rolling coil, one bang start, one bang end whose
     // dissipated energy is the ledger's.
     let events: Vec<&Value> = r.messages["/events"].iter().map(|(_, v)| v).collect();
     let kind = |k: &str| events.iter().filter(|e| e["kind"] == k).count();
@@ -226,9 +226,10 @@ fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
     );
     assert!(detached > 100 && detached < logged.report.links as u64);
     assert_eq!(kind("bang_start"), 1);
-    assert_eq!(kind("bang_settled"), 1);
-    let settled = events.iter().find(|e| e["kind"] == "bang_settled").unwrap();
-    let dissipated = settled["dissipated_j"].as_f64().unwrap();
+    assert_eq!(kind("bang_end"), 1);
+    let end = events.iter().find(|e| e["kind"] == "bang_end").unwrap();
+    assert_eq!(end["ended_by"], "rest", "the yoga mat's bang comes to rest");
+    let dissipated = end["dissipated_j"].as_f64().unwrap();
     let ledger = logged.report.ledger.dissipated_by_bang_j;
     assert!(
         (dissipated - ledger).abs() <= 1e-12 * ledger.abs(),

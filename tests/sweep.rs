@@ -21,7 +21,7 @@ const VARY: [&str; 4] = [
     "--vary",
     "discretisation.links_per_turn=8,16",
     "--vary",
-    "stop.settle_time_s=0",
+    "stop.bang_cap_s=0",
 ];
 
 fn sweep(out: &Path, extra: &[&str]) -> assert_cmd::assert::Assert {
@@ -74,7 +74,7 @@ fn sweep_shards_merge_and_report() {
     let t = SweepTable::read(&full.join("sweep.csv")).unwrap();
     assert_eq!(
         t.varied_keys(),
-        ["discretisation.links_per_turn", "stop.settle_time_s"]
+        ["discretisation.links_per_turn", "stop.bang_cap_s"]
     );
     assert_eq!(t.rows.len(), 2, "one row per run");
     let mut by_index = t.clone();

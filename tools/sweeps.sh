@@ -23,7 +23,7 @@ docs=docs/sweeps
 yoga=scenes/yoga-mat.toml
 thin=scenes/thin-tape.toml
 # The final bang is not part of the unroll that these figures are about: give it no time.
-nobang=(--vary stop.settle_time_s=0)
+nobang=(--vary stop.bang_cap_s=0)
 
 study() { # name scene [sweep args...] -- [report args...]
   local name=$1 scene=$2
