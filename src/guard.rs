@@ -39,6 +39,9 @@ pub const SLIP_FRACTION: f64 = 0.05;
 /// The contact line has left the laid tape when the two differ by more than this fraction
 /// of the laid length, plus one thickness b.
 pub const LAID_MISMATCH_FRACTION: f64 = 0.02;
+/// The simulation has left the exact-geometry model once its contact-line speed differs
+/// from the model's, at the same laid fraction, by more than this fraction.
+pub const LEAVES_EXACT_FRACTION: f64 = 0.05;
 /// A condition of the references counts as broken once it holds for this many consecutive
 /// steps (single steps at a detach or a contact change are noise).
 pub const CONSECUTIVE_STEPS: u32 = 20;
@@ -239,6 +242,9 @@ pub enum LimitKind {
     /// The exact-geometry model needs a floor that pulls (N < 0) from here on: a real rigid
     /// spiral hops.
     ExactModelHops,
+    /// The contact-line speed leaves the exact-geometry model's: the divergence of x' as
+    /// r -> 0 is cut off here.
+    LeavesExact,
 }
 
 /// Where and why a reference stops applying.
@@ -264,6 +270,9 @@ pub struct Applicability {
     outer_radius_m: f64,
     /// The exact model sliding on a frictionless floor, for where its contact line is.
     sliding: Option<ExactGeometry>,
+    /// The exact model rolling, for its contact-line speed.
+    rolling: Option<ExactGeometry>,
+    leave_steps: u32,
     hop_fraction: Option<f64>,
     slip_steps: u32,
     lift_off_steps: u32,
@@ -282,6 +291,8 @@ impl Applicability {
             push_speed_m_s: scene.push_speed_m_s,
             outer_radius_m: t.outer_radius_m,
             sliding: exact.is_sliding().then(|| exact.clone()),
+            rolling: (!exact.is_sliding()).then(|| exact.clone()),
+            leave_steps: 0,
             hop_fraction: exact.hop_onset_fraction(),
             slip_steps: 0,
             lift_off_steps: 0,
@@ -377,6 +388,27 @@ impl Applicability {
         {
             self.note(LimitKind::ExactModelHops, obs, hop_detail(f));
         }
+        if let Some(exact) = &self.rolling
+            && obs.laid_fraction > 0.0
+        {
+            let model = exact.xdot_at_psi(obs.psi_low);
+            let off = xdot_m_s / model - 1.0;
+            if off.abs() > LEAVES_EXACT_FRACTION {
+                self.leave_steps += 1;
+            } else {
+                self.leave_steps = 0;
+            }
+            if self.leave_steps == CONSECUTIVE_STEPS {
+                let detail = format!(
+                    "the contact-line speed {xdot_m_s:.4e} m/s is {:+.1} % from the exact \
+                     model's {model:.4e} m/s at the same laid fraction (bound {} %), for \
+                     {CONSECUTIVE_STEPS} steps",
+                    100.0 * off,
+                    100.0 * LEAVES_EXACT_FRACTION
+                );
+                self.note(LimitKind::LeavesExact, obs, detail);
+            }
+        }
         let r = self.radius_m(obs);
         if r < CONTINUUM_RADIUS_PER_THICKNESS * b {
             let detail = format!(
@@ -422,6 +454,7 @@ pub fn label(kind: LimitKind) -> &'static str {
         LimitKind::LiftOff => "lift-off",
         LimitKind::FewTurns => "r<3b",
         LimitKind::ExactModelHops => "exact hops",
+        LimitKind::LeavesExact => "leaves exact",
     }
 }
 
@@ -561,12 +594,14 @@ mod tests {
             slip_m_s: Some(0.1),
             ..calm()
         };
+        // The contact line moves as the exact model's does there.
+        let v = exact.xdot_at_psi(step(1.0).psi_low);
         // One noisy step, then a calm one: nothing.
-        a.observe(&step(1.0), &slipping, 0.3);
-        a.observe(&step(1.0), &calm(), 0.3);
+        a.observe(&step(1.0), &slipping, v);
+        a.observe(&step(1.0), &calm(), v);
         assert!(a.limits().is_empty());
         for _ in 0..2 * CONSECUTIVE_STEPS {
-            a.observe(&step(1.0), &slipping, 0.3);
+            a.observe(&step(1.0), &slipping, v);
         }
         let kinds: Vec<LimitKind> = a.limits().iter().map(|l| l.kind).collect();
         assert_eq!(kinds, vec![LimitKind::Slip]);
@@ -580,7 +615,7 @@ mod tests {
             ..step(1.0)
         };
         for _ in 0..CONSECUTIVE_STEPS {
-            a.observe(&behind, &calm(), 0.3);
+            a.observe(&behind, &calm(), v);
         }
         let limits = a.finish();
         let kinds: Vec<LimitKind> = limits.iter().map(|l| l.kind).collect();
@@ -593,6 +628,27 @@ mod tests {
             ]
         );
         assert_eq!(limits[2].t_s, None, "the hop at f = 0.5 was never reached");
+    }
+
+    #[test]
+    fn a_contact_line_off_the_exact_model_s_speed_is_noted() {
+        let scene = yoga();
+        let exact = crate::run::exact_geometry(&scene);
+        let v = exact.xdot_at_psi(step(1.0).psi_low);
+        let mut a = Applicability::new(&scene, &exact);
+        // 4 % off: within the bound.
+        for _ in 0..2 * CONSECUTIVE_STEPS {
+            a.observe(&step(1.0), &calm(), 1.04 * v);
+        }
+        assert!(a.limits().is_empty(), "{:?}", a.limits());
+        // 6 % off for one step short of the count, then for the count.
+        for _ in 0..CONSECUTIVE_STEPS - 1 {
+            a.observe(&step(1.0), &calm(), 1.06 * v);
+        }
+        assert!(a.limits().is_empty());
+        a.observe(&step(1.0), &calm(), 1.06 * v);
+        let kinds: Vec<LimitKind> = a.limits().iter().map(|l| l.kind).collect();
+        assert_eq!(kinds, vec![LimitKind::LeavesExact]);
     }
 
     #[test]

@@ -807,6 +807,19 @@ impl Model {
         if !self.world.bodies[piece.body].colliders().is_empty() {
             return;
         }
+        if self.phase != Phase::Rolling {
+            // One polyline through the piece's nodes: one contact pair per piece, not per
+            // link (cheaper, and no doubled contact where two links meet).
+            let nodes: Vec<Vector> = self.piece_nodes(piece).collect();
+            self.world.insert_collider(
+                ColliderBuilder::polyline(nodes, None)
+                    .density(0.0)
+                    .friction(self.friction)
+                    .collision_groups(Self::tape_groups()),
+                Some(piece.body),
+            );
+            return;
+        }
         for k in piece.first..=piece.last {
             let [near, far] = self.local[k];
             let half = 0.5 * (near - far).length();

@@ -143,10 +143,13 @@ const SIM: RGBColor = RGBColor(0, 0, 0);
 const EXACT: RGBColor = RGBColor(31, 119, 180);
 const EQ7: RGBColor = RGBColor(214, 39, 40);
 
-/// Draws `dir/motion.svg` (r and x' against time, with the exact-geometry model and
-/// eq. (7), up to the final bang) and `dir/energy.svg` (kinetic, potential and lost
-/// energy over the whole run, with MgR, E0 and the drop at the bang) from the run's
-/// `samples.csv` and `report.json`. Returns the files written.
+/// Draws, from the run's `samples.csv` and `report.json`: `dir/motion.svg` (r and x'
+/// against time, with the exact-geometry model and eq. (7), up to the final bang),
+/// `dir/energy.svg` (kinetic, potential and lost energy over the whole run, with MgR, E0
+/// and the drop at the bang; below, the bang alone, with what it dissipated split by
+/// mechanism) and `dir/approach.svg` (x' against r, log-log, over the unroll, with the
+/// references, eq. (7)'s x' ~ 1/r, and where the references stop applying). Returns the
+/// files written.
 pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     let samples = SweepTable::read(&dir.join("samples.csv"))?;
     let report_path = dir.join("report.json");
@@ -211,8 +214,15 @@ pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
 
     let energy = dir.join("energy.svg");
     {
-        let root = SVGBackend::new(&energy, (900, 500)).into_drawing_area();
+        let height = if bang_t.is_some() { 950 } else { 500 };
+        let root = SVGBackend::new(&energy, (900, height)).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
+        let (whole, zoom) = if bang_t.is_some() {
+            let (a, b) = root.split_vertically(500);
+            (a, Some(b))
+        } else {
+            (root.clone(), None)
+        };
         let k = col("kinetic_j")?;
         let p = col("potential_j")?;
         let d = col("dissipated_j")?;
@@ -228,7 +238,7 @@ pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
             None => format!("{name}: energy ledger (no final bang reached)"),
         };
         line_chart(
-            &root,
+            &whole,
             &caption,
             "t (s)",
             "energy (J)",
@@ -285,9 +295,232 @@ pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
                 Ok(())
             },
         )?;
+        if let (Some(area), Some(b)) = (zoom, bang_t) {
+            bang_panel(&area, &samples, b, &name)?;
+        }
         root.present().map_err(err)?;
     }
-    Ok(vec![motion, energy])
+
+    let approach = dir.join("approach.svg");
+    approach_plot(&approach, &samples, &report, upto, &name)?;
+    Ok(vec![motion, energy, approach])
+}
+
+/// The bang alone, from its release `bang_t` on, on a log time axis (its impacts take a
+/// millisecond, its settling a tenth of a second): the kinetic energy and, cumulatively,
+/// what it dissipated by mechanism (`samples.csv`'s `bang_*` columns).
+fn bang_panel(
+    area: &Area<'_>,
+    samples: &SweepTable,
+    bang_t: f64,
+    name: &str,
+) -> anyhow::Result<()> {
+    let col = |c: &str| {
+        samples
+            .numbers(c)
+            .with_context(|| format!("samples.csv has no `{c}` column"))
+    };
+    let t = col("t_s")?;
+    let from = t.iter().position(|&ti| ti > bang_t).unwrap_or(t.len());
+    let since: Vec<f64> = t[from..].iter().map(|ti| ti - bang_t).collect();
+    let part = |c: &str| col(c).map(|v| pairs(&since, &v[from..]));
+    let curves = [
+        ("kinetic", part("kinetic_j")?, SIM, false),
+        (
+            "floor: normal impacts",
+            part("bang_floor_normal_j")?,
+            EXACT,
+            false,
+        ),
+        (
+            "floor: friction",
+            part("bang_floor_friction_j")?,
+            RGBColor(44, 160, 44),
+            false,
+        ),
+        ("joints (numerical)", part("bang_joints_j")?, EQ7, true),
+        (
+            "residual (numerical)",
+            part("bang_residual_j")?,
+            RGBColor(148, 103, 189),
+            true,
+        ),
+        (
+            "freezing",
+            part("bang_freeze_j")?,
+            RGBColor(127, 127, 127),
+            true,
+        ),
+    ];
+    let (x0, x1) = log_range(since.iter().copied());
+    let (y0, y1) = range(curves.iter().flat_map(|c| c.1.iter().map(|p| p.1)));
+    let mut chart = ChartBuilder::on(area)
+        .caption(
+            format!("{name}: the final bang, from its release; dissipated so far, by mechanism"),
+            (FONT, 18),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("time since the release (s), log scale")
+        .y_desc("energy (J)")
+        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .light_line_style(WHITE.mix(0.0))
+        .draw()
+        .map_err(err)?;
+    for (label, points, color, dashed) in curves {
+        let style = color.stroke_width(2);
+        if dashed {
+            chart
+                .draw_series(DashedLineSeries::new(points, 8, 5, style))
+                .map_err(err)?
+        } else {
+            chart
+                .draw_series(LineSeries::new(points, style))
+                .map_err(err)?
+        }
+        .label(label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::MiddleLeft)
+        .label_font((FONT, 14))
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}
+
+/// `approach.svg`: the contact-line speed against the equivalent radius over the unroll
+/// (the first `upto` samples), log-log, with the exact-geometry model, eq. (7) and its
+/// x' ~ 1/r, and a mark where each reference stops applying and at the release.
+fn approach_plot(
+    path: &Path,
+    samples: &SweepTable,
+    report: &serde_json::Value,
+    upto: usize,
+    name: &str,
+) -> anyhow::Result<()> {
+    let col = |c: &str| {
+        samples
+            .numbers(c)
+            .map(|v| v[..upto].to_vec())
+            .with_context(|| format!("samples.csv has no `{c}` column"))
+    };
+    let positive = |x: Vec<f64>, y: Vec<f64>| -> Vec<(f64, f64)> {
+        pairs(&x, &y)
+            .into_iter()
+            .filter(|(a, b)| *a > 0.0 && *b > 0.0)
+            .collect()
+    };
+    let sim = positive(col("r_m")?, col("xdot_m_s")?);
+    // The references' own x'(r), down to the bang radius (report.json's `approach`).
+    let curve = |key: &str| -> Vec<(f64, f64)> {
+        report["approach"][key]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(|p| Some((p[0].as_f64()?, p[1].as_f64()?)))
+            .filter(|(a, b)| *a > 0.0 && *b > 0.0)
+            .collect()
+    };
+    let exact = curve("exact_curve");
+    let eq7 = curve("eq7_curve");
+    let t = col("t_s")?;
+    let r = col("r_m")?;
+    let root = SVGBackend::new(path, (900, 650)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let all = sim.iter().chain(&exact).chain(&eq7);
+    let mut chart = log_chart(
+        &root,
+        &format!("{name}: contact-line speed against the equivalent radius r = R sqrt(1 - f)"),
+        "r (m)",
+        "x' (m/s)",
+        all.clone().map(|p| p.0),
+        all.map(|p| p.1),
+    )?;
+    let series = [
+        ("simulation", &sim, SIM, false),
+        ("exact-geometry model", &exact, EXACT, true),
+        ("eq. (7)", &eq7, EQ7, true),
+    ];
+    for (label, pts, c, dashed) in series {
+        let style = c.stroke_width(2);
+        if dashed {
+            chart
+                .draw_series(DashedLineSeries::new(pts.iter().copied(), 8, 5, style))
+                .map_err(err)?
+        } else {
+            chart
+                .draw_series(LineSeries::new(pts.iter().copied(), style))
+                .map_err(err)?
+        }
+        .label(label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+    }
+    // Eq. (7)'s divergence, x' ~ 1/r, through its curve's point at the smallest r.
+    if let (Some(&(r0, v0)), Some(&(r1, _))) = (
+        eq7.iter().min_by(|a, b| a.0.total_cmp(&b.0)),
+        eq7.iter().max_by(|a, b| a.0.total_cmp(&b.0)),
+    ) {
+        let c = RGBColor(127, 127, 127);
+        chart
+            .draw_series(DashedLineSeries::new(
+                [(r0, v0), (r1, v0 * r0 / r1)],
+                3,
+                3,
+                c.stroke_width(1),
+            ))
+            .map_err(err)?
+            .label("x' ~ 1/r (eq. 7 as r -> 0)")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1)));
+    }
+    // Marks: where each reference stops applying, and the release; at the simulation's
+    // equivalent radius at that time.
+    let r_at = |time: f64| {
+        t.iter()
+            .position(|&ti| ti >= time)
+            .and_then(|i| r.get(i).copied())
+    };
+    let mut marks: Vec<(String, f64)> = report["reference_limits"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter(|l| l["kind"] != "few-turns")
+        .filter_map(|l| {
+            let time = l["t_s"].as_f64()?;
+            Some((l["kind"].as_str()?.replace('-', " "), r_at(time)?))
+        })
+        .collect();
+    if let Some(peak) = report["approach"]["peak_r_m"].as_f64()
+        && report["bang"].is_object()
+    {
+        marks.push(("the release (last link)".into(), peak));
+    }
+    let (y0, y1) = (
+        sim.iter().map(|p| p.1).fold(f64::INFINITY, f64::min),
+        sim.iter().map(|p| p.1).fold(0.0_f64, f64::max),
+    );
+    for (i, (label, at)) in marks.into_iter().enumerate() {
+        if !(at > 0.0 && y0.is_finite() && y1 > 0.0) {
+            continue;
+        }
+        let c = color(i + 3);
+        chart
+            .draw_series(LineSeries::new([(at, y0), (at, y1)], c.stroke_width(1)))
+            .map_err(err)?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1)));
+    }
+    legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+    root.present().map_err(err)?;
+    Ok(())
 }
 
 fn log_chart<'a, 'b>(

@@ -563,11 +563,7 @@ impl ExactGeometry {
             x_m: self
                 .sliding_contact_x(psi)
                 .unwrap_or_else(|| self.spiral.arc(psi, self.spiral.psi_out)),
-            xdot_m_s: if self.sliding {
-                f64::NAN
-            } else {
-                self.spiral.a_m * (1.0 + psi * psi).sqrt() * psidot
-            },
+            xdot_m_s: self.xdot(psi, psidot),
             omega_rad_s: Spiral::turn_rate(psi) * psidot,
             kinetic_j: (self.energy_j - potential_j).max(0.0),
             potential_j,
@@ -577,6 +573,20 @@ impl ExactGeometry {
     /// The state at time `t`, `None` past the tabulated end.
     pub fn state_at_time(&self, t: f64) -> Option<RefState> {
         self.traj.q_at(t).map(|psi| self.state_at_psi(psi, t))
+    }
+
+    /// Contact-line speed with the lowest point at `psi`, `a sqrt(1 + psi^2) psi'` (m/s);
+    /// `NaN` when sliding (the contact line is not the laid length).
+    pub fn xdot_at_psi(&self, psi: f64) -> f64 {
+        self.xdot(psi, self.psidot(psi))
+    }
+
+    fn xdot(&self, psi: f64, psidot: f64) -> f64 {
+        if self.sliding {
+            f64::NAN
+        } else {
+            self.spiral.a_m * (1.0 + psi * psi).sqrt() * psidot
+        }
     }
 
     /// The spiral parameter of the lowest point at time `t`, `None` past the tabulated end.

@@ -197,6 +197,49 @@ pub struct BangReport {
     pub ended_by: Option<BangEnd>,
 }
 
+/// The approach to the bang: how far the contact line's speed diverged before the coil was
+/// released (eq. 7's x' ~ 1/r as r -> 0).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Approach {
+    /// Fastest contact-line speed while the coil rolled (m/s).
+    pub peak_xdot_m_s: f64,
+    /// Continuum-equivalent radius `R sqrt(1 - f)` there (m).
+    pub peak_r_m: f64,
+    /// The exact-geometry model's contact-line speed at the same laid fraction (m/s).
+    pub peak_xdot_geo_m_s: f64,
+    /// The exact-geometry model's contact-line speed against the equivalent radius,
+    /// `[r (m), x' (m/s)]`, down to the bang radius (empty on a frictionless floor, where
+    /// the contact line slides).
+    pub exact_curve: Vec<[f64; 2]>,
+    /// Eq. (7)'s contact-line speed against the radius, `[r (m), x' (m/s)]`, down to the
+    /// bang radius.
+    pub eq7_curve: Vec<[f64; 2]>,
+}
+
+/// Points of [`Approach`]'s curves, spaced evenly in log r.
+const APPROACH_POINTS: u32 = 96;
+
+impl Approach {
+    /// The references' `x'(r)` from R down to the bang radius, for the approach plot.
+    fn curves(&mut self, scene: &Scene, refs: &References) {
+        let big_r = scene.tape.outer_radius_m;
+        let r_end = scene.stop.bang_radius_m;
+        let radii = (0..=APPROACH_POINTS)
+            .map(|i| big_r * (r_end / big_r).powf(f64::from(i) / f64::from(APPROACH_POINTS)));
+        for r in radii {
+            let f = 1.0 - (r / big_r).powi(2);
+            let exact = refs.exact.xdot_at_psi(refs.exact.psi_at_fraction(f));
+            if exact.is_finite() {
+                self.exact_curve.push([r, exact]);
+            }
+            let eq7 = refs.continuum.state_at_radius(r, 0.0).xdot_m_s;
+            if eq7.is_finite() {
+                self.eq7_curve.push([r, eq7]);
+            }
+        }
+    }
+}
+
 /// Everything a run produced, for JSON and the summary.
 #[derive(Debug, Clone, Serialize)]
 pub struct RunReport {
@@ -229,6 +272,8 @@ pub struct RunReport {
     pub milestones: Vec<Milestone>,
     /// The energy ledger.
     pub ledger: Ledger,
+    /// The approach to the bang: the peak contact-line speed.
+    pub approach: Approach,
     /// The final bang's observables, if it began.
     pub bang: Option<BangReport>,
     /// Laid fraction from which the exact-geometry model needs a floor that pulls.
@@ -389,6 +434,13 @@ pub fn run_until(
     let mut hits: Vec<Option<MilestoneHit>> = radii.iter().map(|_| None).collect();
     let mut guard = Guard::new(scene, e0);
     let mut limits = Applicability::new(scene, &refs.exact);
+    let mut approach = Approach {
+        peak_xdot_m_s: scene.push_speed_m_s,
+        peak_r_m: big_r,
+        peak_xdot_geo_m_s: scene.push_speed_m_s,
+        exact_curve: Vec::new(),
+        eq7_curve: Vec::new(),
+    };
     let mut status = Status::Completed;
     let mut prev_logged = false;
 
@@ -490,6 +542,11 @@ pub fn run_until(
             }
         }
         limits.observe(&obs, &health, xdot);
+        if obs.phase == Phase::Rolling && prev.is_some() && xdot > approach.peak_xdot_m_s {
+            approach.peak_xdot_m_s = xdot;
+            approach.peak_r_m = big_r * (1.0 - obs.laid_fraction).max(0.0).sqrt();
+            approach.peak_xdot_geo_m_s = refs.exact.xdot_at_psi(obs.psi_low);
+        }
         let done = obs.phase == Phase::Done;
         let timed_out = obs.t_s >= scene.stop.max_time_s;
         let interrupted = stop.load(Ordering::Relaxed);
@@ -525,7 +582,9 @@ pub fn run_until(
                 o.observe_event(event)?;
             }
         }
-        prev_logged = obs.t_s >= next_sample || last_step;
+        let released =
+            obs.phase != Phase::Rolling && prev.is_some_and(|p| p.phase == Phase::Rolling);
+        prev_logged = obs.t_s >= next_sample || last_step || released;
         if prev_logged {
             let mut sample = make_sample(&obs, xdot, e0, &refs);
             let (p0, t0) = at_last_sample;
@@ -542,6 +601,12 @@ pub fn run_until(
                 o.observe_sample(&sample)?;
             }
             next_sample = obs.t_s + scene.sample_interval_s;
+            // The bang is over in a few milliseconds of its start: sample it at times since
+            // the release growing geometrically from one step, up to the sample interval.
+            if let Some((t_bang, _)) = bang {
+                let since = obs.t_s - t_bang;
+                next_sample = next_sample.min(t_bang + since * BANG_SAMPLE_GROWTH);
+            }
         }
         if obs.t_s >= next_frame || (last_step && frame_interval.is_finite()) {
             let frame = make_frame(scene, &model, &refs, obs.t_s, obs.x_m);
@@ -656,6 +721,10 @@ pub fn run_until(
         reference_limits: limits.finish(),
         milestones,
         ledger,
+        approach: {
+            approach.curves(scene, &refs);
+            approach
+        },
         bang: bang.map(|_| BangReport {
             kinetic_in_j: last.bang.kinetic_in_j,
             top_speed_m_s: last.bang.top_speed_m_s,
@@ -676,6 +745,10 @@ pub fn run_until(
     }
     Ok(report)
 }
+
+/// In the final bang, each sample's time since the release is at least this factor times
+/// the last one's (and at most one `output.sample_interval_s` later).
+const BANG_SAMPLE_GROWTH: f64 = 1.1;
 
 /// Points per turn of the exact-geometry ghost spiral.
 const GHOST_POINTS_PER_TURN: u32 = 32;

@@ -29,7 +29,7 @@ const DEFAULT_ITERATIONS: i64 = 4;
 /// Default `solver.freeze_speed_m_s`.
 const DEFAULT_FREEZE_SPEED_M_S: f64 = 0.001;
 /// Default `solver.bang_step_rad`.
-const DEFAULT_BANG_STEP_RAD: f64 = 0.05;
+const DEFAULT_BANG_STEP_RAD: f64 = 0.15;
 /// Default `solver.contact_hz`.
 const DEFAULT_CONTACT_HZ: f64 = 1.0e4;
 /// Default `solver.joint_hz`.
@@ -37,7 +37,7 @@ const DEFAULT_JOINT_HZ: f64 = 1.0e7;
 /// Default `stop.max_time_s`.
 const DEFAULT_MAX_TIME_S: f64 = 60.0;
 /// Default `solver.bang_iterations`.
-const DEFAULT_BANG_ITERATIONS: i64 = 16;
+const DEFAULT_BANG_ITERATIONS: i64 = 24;
 /// Default `stop.bang_cap_s`.
 const DEFAULT_BANG_CAP_S: f64 = 2.0;
 /// Default `stop.rest_fraction`.
@@ -140,10 +140,10 @@ pub struct Solver {
     /// A laid link slower than this is frozen (removed from the engine), m/s
     /// (default: 0.001).
     pub freeze_speed_m_s: f64,
-    /// In the final bang, the largest rotation of any body in one step, rad (default: 0.05).
+    /// In the final bang, the largest rotation of any body in one step, rad (default: 0.15).
     /// No link is shed there, so the rolling rule (`steps_per_link`) no longer applies.
     pub bang_step_rad: f64,
-    /// Rapier solver iterations per step in the final bang, count (default: 16). Its impacts
+    /// Rapier solver iterations per step in the final bang, count (default: 24). Its impacts
     /// must travel along the chain within a step: with too few, the joints give way and
     /// absorb part of each impact.
     pub bang_iterations: u32,

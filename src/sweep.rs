@@ -204,13 +204,40 @@ pub fn result_columns(milestone_labels: &[String]) -> Vec<String> {
             "lost_before_bang_j",
             "lost_before_bang_of_e0",
             "lost_before_2b_of_e0",
-            STATUS_COLUMN,
+            "max_energy_rise_rel",
+            "peak_xdot_m_s",
+            "peak_r_m",
         ]
         .iter()
         .map(|s| (*s).to_owned()),
     );
+    c.extend(BANG_COLUMNS.iter().map(|s| (*s).to_owned()));
+    c.extend([STATUS_COLUMN].iter().map(|s| (*s).to_owned()));
     c
 }
+
+/// The final bang's columns of `sweep.csv` (empty cells for a run stopped before the
+/// bang): what it received and dissipated, the split of what it dissipated by mechanism
+/// (fractions), its observables, and what ended it.
+pub const BANG_COLUMNS: [&str; 17] = [
+    "bang_kinetic_in_j",
+    "bang_dissipated_j",
+    "bang_floor_normal_of",
+    "bang_floor_friction_of",
+    "bang_joints_of",
+    "bang_freeze_of",
+    "bang_residual_of",
+    "bang_numerical_of",
+    "bang_top_speed_m_s",
+    "bang_duration_s",
+    "bang_peak_floor_force_n",
+    "bang_floor_impulse_n_s",
+    "bang_end_x_m",
+    "bang_laid_length_m",
+    "bang_still_moving_of",
+    "bang_wall_s",
+    "bang_ended_by",
+];
 
 /// The header of `sweep.csv`: index, the varied keys, then [`result_columns`].
 pub fn header(keys: &[String], milestone_labels: &[String]) -> Vec<String> {
@@ -263,6 +290,10 @@ pub fn result_cells(report: &RunReport, jobs: usize) -> Vec<String> {
         .find(|m| m.label == "2b")
         .and_then(|m| m.dissipated_j)
         .map(|d| d / l.e0_j)));
+    c.push(num(report.max_energy_rise_rel));
+    c.push(num(report.approach.peak_xdot_m_s));
+    c.push(num(report.approach.peak_r_m));
+    c.extend(bang_cells(report));
     let status = if l.bang_time_s.is_some() && report.sim_time_s < report.scene.stop.max_time_s {
         "ok"
     } else {
@@ -270,6 +301,42 @@ pub fn result_cells(report: &RunReport, jobs: usize) -> Vec<String> {
     };
     c.push(status.to_owned());
     c
+}
+
+/// The [`BANG_COLUMNS`] cells of a finished run.
+fn bang_cells(report: &RunReport) -> Vec<String> {
+    let Some(b) = &report.bang else {
+        return vec![String::new(); BANG_COLUMNS.len()];
+    };
+    let l = &report.ledger;
+    let d = l.dissipated_by_bang_j;
+    let of = |x: f64| num(x / d);
+    let split = &l.bang;
+    vec![
+        num(b.kinetic_in_j),
+        num(d),
+        of(split.floor_normal_j),
+        of(split.floor_friction_j),
+        of(split.joints_j),
+        of(split.freeze_j),
+        of(split.residual_j),
+        of(split.numerical_j()),
+        num(b.top_speed_m_s),
+        num(b.duration_s),
+        num(b.peak_floor_force_n),
+        num(b.floor_impulse_n_s),
+        num(b.end_x_m),
+        num(b.laid_length_m),
+        num(b.still_moving_j / b.kinetic_in_j),
+        num(report.wall_time_s - report.wall_time_rolling_s),
+        b.ended_by.map_or_else(String::new, |e| {
+            match e {
+                crate::model::BangEnd::Rest => "rest",
+                crate::model::BangEnd::Cap => "cap",
+            }
+            .to_owned()
+        }),
+    ]
 }
 
 /// Quotes a CSV cell if it holds a comma, a quote or a line break (RFC 4180).
