@@ -224,6 +224,10 @@ impl CoilSums {
     }
 }
 
+/// In the bang a piece is pinned this fraction of R above the floor's contact plane (the
+/// engine's tolerances scale with R): see [`Model::pin_to_world`].
+const PIN_LIFT_PER_RADIUS: f64 = 1e-4;
+
 const TAPE_GROUP: Group = Group::GROUP_1;
 const FLOOR_GROUP: Group = Group::GROUP_2;
 
@@ -272,6 +276,8 @@ pub struct Model {
     bang_step_rad: f64,
     /// Shortest piece the remaining wound links are grouped into at the release (m).
     bang_piece_m: f64,
+    /// How far above the floor's contact plane a piece is pinned in the bang (m).
+    pin_lift_m: f64,
     /// Softness of every joint (see `Solver::joint_hz`).
     joint_softness: SpringCoefficients<Real>,
     friction: f64,
@@ -506,6 +512,7 @@ impl Model {
             freeze_speed: scene.solver.freeze_speed_m_s,
             bang_step_rad: scene.solver.bang_step_rad,
             bang_piece_m: scene.solver.bang_piece_m,
+            pin_lift_m: PIN_LIFT_PER_RADIUS * tape.outer_radius_m,
             joint_softness: SpringCoefficients::new(
                 scene.solver.joint_hz,
                 SpringCoefficients::<Real>::joint_defaults().damping_ratio,
@@ -852,16 +859,23 @@ impl Model {
         }
     }
 
-    /// Pins the near node of `piece` to the world where it is now. The world's body also
+    /// Pins the near node of `piece` to the world where it is now (in the bang, not below
+    /// the floor's contact plane). The world's body also
     /// holds the floor, and the pin disables their contact while the coil rolls: the pinned
     /// link lies on the floor, held there by its neighbours (with the contact as well, the
     /// pin and the floor fight over it). In the final bang the pinned piece may swing, and
     /// without the contact it would pass through the floor.
     fn pin_to_world(&mut self, piece: Piece) {
         let near = self.local[piece.first][0];
-        let node = self.world.bodies[piece.body]
+        let mut node = self.world.bodies[piece.body]
             .position()
             .transform_point(near);
+        if self.phase != Phase::Rolling {
+            // Just above the contact plane: on or below it, the floor pushes the pinned node
+            // out while the pin holds it, and the solver's two impulses grow against each
+            // other without bound (kilonewtons on a resting piece).
+            node.y = node.y.max(self.half_b + self.pin_lift_m);
+        }
         let joint = RevoluteJointBuilder::new()
             .local_anchor1(node)
             .local_anchor2(near)
