@@ -189,6 +189,223 @@ pub struct SweepAnalysis {
     pub studies: Vec<Study>,
     /// A target to report against: (largest error, largest cost in s).
     pub target: Option<(f64, f64)>,
+    /// The final bang's ensembles, if the sweep has bang columns.
+    pub bang: Vec<BangStudy>,
+}
+
+/// The final bang's observables a bang study follows: a label and how to read it from a
+/// sweep row (`None` where the run has no bang).
+pub const BANG_OBSERVABLES: [(&str, &str); 10] = [
+    ("dissipated / kinetic in", "dissipated"),
+    ("floor normal share", "bang_floor_normal_of"),
+    ("floor friction share", "bang_floor_friction_of"),
+    ("numerical share", "bang_numerical_of"),
+    ("top speed (m/s)", "bang_top_speed_m_s"),
+    ("duration (s)", "bang_duration_s"),
+    ("peak floor force (N)", "bang_peak_floor_force_n"),
+    ("floor impulse (N s)", "bang_floor_impulse_n_s"),
+    ("end short of flat (m)", "short"),
+    ("bang wall / unroll wall", "cost"),
+];
+
+/// The final bang in one varied key, the others held: a chaotic process, so each
+/// setting is an ensemble (the repetitions, e.g. pushes differing in the fourth digit) and
+/// each observable its mean with the standard error of that mean.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BangStudy {
+    /// The varied key.
+    pub key: String,
+    /// The other keys' settings, `k=v k=v`.
+    pub group: String,
+    /// The key's settings, coarsest first.
+    pub values: Vec<f64>,
+    /// Step sizes ([`step_size`]) of the settings.
+    pub h: Vec<f64>,
+    /// Runs (with a bang) per setting.
+    pub n: Vec<usize>,
+    /// Per observable of [`BANG_OBSERVABLES`]: mean per setting.
+    pub mean: Vec<Vec<f64>>,
+    /// Per observable: standard error of the mean per setting (`NaN` with one run).
+    pub se: Vec<Vec<f64>>,
+    /// Per observable: fit of |mean - the finest setting's mean| against h (the finest
+    /// setting excluded).
+    pub fit: Vec<Option<PowerFit>>,
+}
+
+/// The bang studies of a sweep with bang columns: one per numeric varied key and setting
+/// of the other keys, the `repeats` pooled as the ensemble. Empty if the sweep has no bang
+/// columns or no key takes two settings.
+pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
+    let col = |name: &str| table.numbers(name);
+    let (Some(kin), Some(diss), Some(laid), Some(end), Some(bw), Some(rw)) = (
+        col("bang_kinetic_in_j"),
+        col("bang_dissipated_j"),
+        col("bang_laid_length_m"),
+        col("bang_end_x_m"),
+        col("bang_wall_s"),
+        col("wall_rolling_s"),
+    ) else {
+        return Vec::new();
+    };
+    let rows = table.rows.len();
+    let values: Vec<Vec<f64>> = BANG_OBSERVABLES
+        .iter()
+        .map(|(_, c)| match *c {
+            "dissipated" => (0..rows).map(|r| diss[r] / kin[r]).collect(),
+            "short" => (0..rows).map(|r| laid[r] - end[r]).collect(),
+            "cost" => (0..rows).map(|r| bw[r] / rw[r]).collect(),
+            c => col(c).unwrap_or_else(|| vec![f64::NAN; rows]),
+        })
+        .collect();
+    let keys = table.varied_keys();
+    let cell = |r: usize, k: &str| table.rows[r][table.column(k).expect("a varied key")].clone();
+    let mut studies = Vec::new();
+    for key in keys.iter().filter(|k| !repeats.contains(k)) {
+        let Some(vals) = table
+            .numbers(key)
+            .filter(|v| v.iter().all(|x| x.is_finite()))
+        else {
+            continue;
+        };
+        // Group the runs with a bang by the other (non-repeat) keys, then by this key.
+        let mut groups: BTreeMap<String, BTreeMap<u64, Vec<usize>>> = BTreeMap::new();
+        for r in (0..rows).filter(|&r| kin[r].is_finite()) {
+            let g = keys
+                .iter()
+                .filter(|k| *k != key && !repeats.contains(k))
+                .map(|k| format!("{k}={}", cell(r, k)))
+                .collect::<Vec<_>>()
+                .join(" ");
+            groups
+                .entry(g)
+                .or_default()
+                .entry(vals[r].to_bits())
+                .or_default()
+                .push(r);
+        }
+        for (group, by_value) in groups {
+            if by_value.len() < 2 {
+                continue;
+            }
+            let mut settings: Vec<(f64, Vec<usize>)> = by_value
+                .into_iter()
+                .map(|(bits, rs)| (f64::from_bits(bits), rs))
+                .collect();
+            settings.sort_by(|a, b| step_size(key, b.0).total_cmp(&step_size(key, a.0)));
+            let h: Vec<f64> = settings.iter().map(|(v, _)| step_size(key, *v)).collect();
+            let (mut mean, mut se, mut fit) = (Vec::new(), Vec::new(), Vec::new());
+            for v in &values {
+                let stats: Vec<(f64, f64)> = settings
+                    .iter()
+                    .map(|(_, rs)| mean_and_se(rs.iter().map(|&r| v[r])))
+                    .collect();
+                let m: Vec<f64> = stats.iter().map(|s| s.0).collect();
+                let finest = *m.last().expect("two settings");
+                let change: Vec<f64> = m[..m.len() - 1]
+                    .iter()
+                    .map(|x| (x - finest).abs())
+                    .collect();
+                fit.push(fit_power(&h[..h.len() - 1], &change));
+                se.push(stats.iter().map(|s| s.1).collect());
+                mean.push(m);
+            }
+            studies.push(BangStudy {
+                key: key.clone(),
+                group,
+                values: settings.iter().map(|s| s.0).collect(),
+                n: settings.iter().map(|s| s.1.len()).collect(),
+                h,
+                mean,
+                se,
+                fit,
+            });
+        }
+    }
+    studies
+}
+
+/// Mean and standard error of the mean of the finite values (`NaN`s if none; the error is
+/// `NaN` with one).
+fn mean_and_se(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let v: Vec<f64> = values.filter(|x| x.is_finite()).collect();
+    #[allow(clippy::cast_precision_loss)]
+    let n = v.len() as f64;
+    if v.is_empty() {
+        return (f64::NAN, f64::NAN);
+    }
+    let m = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
+    (m, (var / n).sqrt())
+}
+
+impl BangStudy {
+    /// The study as Markdown: one row per setting (mean ± standard error of each
+    /// observable), then the fitted order of each observable's change from the finest
+    /// setting, and whether that change is within two standard errors.
+    pub fn markdown(&self) -> String {
+        let mut o = String::new();
+        let _ = writeln!(
+            o,
+            "### `{}`{}\n",
+            self.key,
+            if self.group.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", self.group)
+            }
+        );
+        let names: Vec<&str> = BANG_OBSERVABLES.iter().map(|o| o.0).collect();
+        let _ = writeln!(o, "| {} | runs | {} |", self.key, names.join(" | "));
+        let _ = writeln!(o, "|---|---|{}", "---|".repeat(names.len()));
+        for i in 0..self.values.len() {
+            let cells: Vec<String> = (0..names.len())
+                .map(|k| show_mean(self.mean[k][i], self.se[k][i]))
+                .collect();
+            let _ = writeln!(
+                o,
+                "| {} | {} | {} |",
+                self.values[i],
+                self.n[i],
+                cells.join(" | ")
+            );
+        }
+        let last = self.values.len() - 1;
+        let orders: Vec<String> = (0..names.len())
+            .map(|k| {
+                // The change from the finest setting is noise if within two standard errors.
+                let resolved = (0..last).any(|i| {
+                    let d = (self.mean[k][i] - self.mean[k][last]).abs();
+                    d > 2.0 * self.se[k][i].hypot(self.se[k][last])
+                });
+                match (&self.fit[k], resolved) {
+                    (_, false) => "within noise".to_owned(),
+                    (Some(f), true) if f.order_se.is_finite() => {
+                        format!("p = {:.2} ± {:.2}", f.order, f.order_se)
+                    }
+                    (Some(f), true) => format!("p = {:.2}", f.order),
+                    (None, true) => "-".to_owned(),
+                }
+            })
+            .collect();
+        let _ = writeln!(
+            o,
+            "| order of the change from the finest | | {} |",
+            orders.join(" | ")
+        );
+        o
+    }
+}
+
+/// `mean ± se` with three significant digits.
+fn show_mean(m: f64, se: f64) -> String {
+    if !m.is_finite() {
+        return "-".into();
+    }
+    if se.is_finite() {
+        format!("{m:.3e} ± {se:.1e}")
+    } else {
+        format!("{m:.3e}")
+    }
 }
 
 /// Keys that name a series in the Pareto plot when they are varied: the contact model
@@ -319,8 +536,10 @@ impl SweepAnalysis {
                 });
             }
         }
+        let bang = bang_studies(&table, repeats);
         Ok(Self {
             table,
+            bang,
             reference,
             cost_column: cost_column.to_owned(),
             cost,
@@ -411,6 +630,20 @@ impl SweepAnalysis {
                 );
             }
             let _ = writeln!(o);
+        }
+        if !self.bang.is_empty() {
+            let _ = writeln!(o, "## The final bang\n");
+            let _ = writeln!(
+                o,
+                "The bang is chaotic: runs that differ in the fourth digit of a setting end \
+                 differently. Each setting is an ensemble (the repetitions), each cell the mean \
+                 ± the standard error of the mean. The last row fits |mean - the finest \
+                 setting's mean| against the step h by least squares in log-log, where that \
+                 change exceeds two standard errors somewhere (else: within noise).\n"
+            );
+            for b in &self.bang {
+                let _ = writeln!(o, "{}", b.markdown());
+            }
         }
         let _ = writeln!(o, "## Pareto front (error against cost)\n");
         if self.front.is_empty() {

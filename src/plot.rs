@@ -10,7 +10,7 @@ use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
-use crate::analysis::{PowerFit, SweepAnalysis};
+use crate::analysis::{BANG_OBSERVABLES, BangStudy, PowerFit, SweepAnalysis};
 use crate::sweep::SweepTable;
 
 type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
@@ -822,5 +822,79 @@ pub fn plot_sweep(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<
         root.present().map_err(err)?;
         written.push(path.clone());
     }
+    // The final bang's ensembles: one picture per study (per key, if only one group).
+    let keys: Vec<&str> = a.bang.iter().map(|b| b.key.as_str()).collect();
+    for (i, b) in a.bang.iter().enumerate() {
+        let alone = keys.iter().filter(|k| **k == b.key).count() == 1;
+        let stem = if alone {
+            format!("bang-{}", b.key)
+        } else {
+            format!("bang-{}-{i}", b.key)
+        };
+        let path = dir.join(format!("{stem}.svg"));
+        bang_study_plot(&path, b, title)?;
+        written.push(path);
+    }
     Ok(written)
+}
+
+/// One panel per bang observable: its ensemble mean ± standard error against the step h
+/// of the study's key (log h).
+fn bang_study_plot(path: &Path, b: &BangStudy, title: &str) -> anyhow::Result<()> {
+    let root = SVGBackend::new(path, (1000, 1400)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let (head, body) = root.split_vertically(40);
+    head.draw(&Text::new(
+        format!(
+            "{title}: the final bang against {}{} (ensemble mean ± standard error)",
+            b.key,
+            if b.group.is_empty() {
+                String::new()
+            } else {
+                format!(", {}", b.group)
+            }
+        ),
+        (20, 12),
+        (FONT, 18),
+    ))
+    .map_err(err)?;
+    let panels = body.split_evenly((5, 2));
+    let (h0, h1) = log_range(b.h.iter().copied());
+    for (k, panel) in panels.iter().enumerate().take(BANG_OBSERVABLES.len()) {
+        let (m, se) = (&b.mean[k], &b.se[k]);
+        let lo = m.iter().zip(se).map(|(m, s)| m - s.max(0.0));
+        let hi = m.iter().zip(se).map(|(m, s)| m + s.max(0.0));
+        let (y0, y1) = range(lo.chain(hi));
+        let mut chart = ChartBuilder::on(panel)
+            .caption(BANG_OBSERVABLES[k].0, (FONT, 15))
+            .margin(8)
+            .x_label_area_size(30)
+            .y_label_area_size(70)
+            .build_cartesian_2d((h0..h1).log_scale(), y0..y1)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc(format!("h of {}", b.key))
+            .x_label_formatter(&|v| format!("{v:.0e}"))
+            .light_line_style(WHITE.mix(0.0))
+            .draw()
+            .map_err(err)?;
+        let pts = pairs(&b.h, m);
+        chart
+            .draw_series(LineSeries::new(pts.iter().copied(), SIM.stroke_width(1)))
+            .map_err(err)?;
+        chart
+            .draw_series(
+                b.h.iter()
+                    .zip(m)
+                    .zip(se)
+                    .filter(|((h, m), s)| h.is_finite() && m.is_finite() && s.is_finite())
+                    .map(|((&h, &m), &s)| {
+                        ErrorBar::new_vertical(h, m - s, m, m + s, EXACT.filled(), 6)
+                    }),
+            )
+            .map_err(err)?;
+    }
+    root.present().map_err(err)?;
+    Ok(())
 }

@@ -1,5 +1,6 @@
 //! Integration tests: one binary, so the engine links once.
 
+mod bang;
 mod cli;
 mod fuzz;
 mod hard;

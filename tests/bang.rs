@@ -1,0 +1,131 @@
+//! The final bang: it comes to rest, its energy never rises, its ledger by mechanism
+//! closes, and its numerical part (joints and residual) stays small.
+
+use crate::support::run_kept;
+use uncoil::guard::Status;
+use uncoil::model::BangEnd;
+use uncoil::run::{RunReport, Sample};
+use uncoil::scene::Scene;
+
+/// The issue's bounds: at most 0.5 % of the kinetic energy the bang received still moving
+/// at the end; the energy never more than 0.1 % of the energy scale above E0; the
+/// numerical part at most 5 % of what the bang dissipates.
+const STILL_MOVING: f64 = 0.005;
+const ENERGY_RISE: f64 = 0.001;
+const NUMERICAL: f64 = 0.05;
+
+fn shipped(name: &str) -> Scene {
+    Scene::from_file(format!("{}/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap()
+}
+
+/// Checks what every bang must show and returns the numerical share of what it dissipated.
+fn check_bang(name: &str, samples: &[Sample], report: &RunReport) -> f64 {
+    assert_eq!(
+        report.status,
+        Status::Completed,
+        "{name}: {}",
+        report.stop_reason
+    );
+    let bang = report
+        .bang
+        .unwrap_or_else(|| panic!("{name}: no bang: {}", report.stop_reason));
+    assert_eq!(
+        bang.ended_by,
+        Some(BangEnd::Rest),
+        "{name}: {}",
+        report.stop_reason
+    );
+    let moving = bang.still_moving_j / bang.kinetic_in_j;
+    assert!(
+        moving <= STILL_MOVING,
+        "{name}: {:.3} % of the kinetic energy the bang received still moving",
+        100.0 * moving
+    );
+    // The energy never rises: at every sample, and at every step (the guard's record).
+    let l = &report.ledger;
+    let bound = ENERGY_RISE * l.energy_scale_j;
+    for s in samples {
+        let rise = s.kinetic_j + s.potential_j - l.e0_j;
+        assert!(
+            rise <= bound,
+            "{name}: t = {} s: E - E0 = {rise:.3e} J, above {bound:.3e} J",
+            s.t_s
+        );
+    }
+    assert!(
+        report.max_energy_rise_rel <= ENERGY_RISE,
+        "{name}: energy rose by {:.3e} of the energy scale",
+        report.max_energy_rise_rel
+    );
+    // The bang's ledger closes at every sample: its five parts are what it dissipated.
+    for s in samples {
+        let parts = s.bang_floor_normal_j
+            + s.bang_floor_friction_j
+            + s.bang_joints_j
+            + s.bang_freeze_j
+            + s.bang_residual_j;
+        assert!(
+            (parts - s.lost_bang_j).abs() <= 1e-9 * l.energy_scale_j,
+            "{name}: t = {} s: the bang's parts sum to {parts:e} J, it dissipated {:e} J",
+            s.t_s,
+            s.lost_bang_j
+        );
+    }
+    let d = l.dissipated_by_bang_j;
+    assert!(
+        (l.bang.total_j() - d).abs() <= 1e-9 * l.energy_scale_j,
+        "{name}: report's parts {} J, dissipated {d} J",
+        l.bang.total_j()
+    );
+    l.bang.numerical_j() / d
+}
+
+#[test]
+fn the_yoga_mat_s_bang_comes_to_rest_on_the_floor_and_its_ledger_closes() {
+    let (samples, report) = run_kept(&shipped("yoga-mat"));
+    let numerical = check_bang("yoga-mat", &samples, &report);
+    assert!(
+        numerical <= NUMERICAL,
+        "numerical part {:.2} % of what the bang dissipated",
+        100.0 * numerical
+    );
+    // Where MgR goes: into the floor, by impacts and friction.
+    let l = &report.ledger;
+    let floor = (l.bang.floor_normal_j + l.bang.floor_friction_j) / l.dissipated_by_bang_j;
+    assert!(floor > 0.9, "the floor took {:.1} %", 100.0 * floor);
+    // The bang dissipates what it received and the height left above lying flat.
+    let received = report.bang.unwrap().kinetic_in_j;
+    assert!(
+        (l.dissipated_by_bang_j / received - 1.0).abs() < 0.01,
+        "received {received} J, dissipated {} J",
+        l.dissipated_by_bang_j
+    );
+}
+
+#[test]
+fn slope_up_completes_without_gaining_energy() {
+    // It used to stop in its bang: energy rising 2.8e-2 J above E0.
+    let (samples, report) = run_kept(&shipped("slope-up"));
+    check_bang("slope-up", &samples, &report);
+}
+
+#[test]
+fn a_small_coil_s_bang_is_physics_not_numerics() {
+    // A coil of 4 mm tape, 2 cm across, released with one turn left as the yoga mat is: a
+    // quick bang with the defaults. (Eight such coils, their pushes 0.300-0.307 m/s: 1.7 to
+    // 2.9 % numerical.)
+    let scene = Scene::from_toml_str(
+        "[tape]\nouter_radius_m = 0.02\nthickness_m = 0.004\nmass_kg = 0.2\n\
+         [push]\ncontact_speed_m_s = 0.3\n[discretisation]\nlinks_per_turn = 16\n\
+         [stop]\nbang_radius_m = 0.004\n",
+        "small",
+    )
+    .unwrap();
+    let (samples, report) = run_kept(&scene);
+    let numerical = check_bang("small", &samples, &report);
+    assert!(
+        numerical <= NUMERICAL,
+        "numerical part {:.2} % of what the bang dissipated",
+        100.0 * numerical
+    );
+}
