@@ -77,10 +77,11 @@ pub fn fit_power(x: &[f64], y: &[f64]) -> Option<PowerFit> {
 
 /// The step size a setting stands for, so that a convergence order is positive when the
 /// error falls as the setting is refined: a key naming a size in its unit (`_s`, `_m`,
-/// e.g. `solver.max_dt_s`) is the step itself; any other (a count or rate, e.g.
-/// `discretisation.links_per_turn`, `solver.steps_per_link`) gives `1 / value`.
+/// `_rad`, e.g. `solver.max_dt_s`, `solver.bang_step_rad`) is the step itself; any other
+/// (a count or rate, e.g. `discretisation.links_per_turn`, `solver.steps_per_link`) gives
+/// `1 / value`.
 pub fn step_size(key: &str, value: f64) -> f64 {
-    if key.ends_with("_s") || key.ends_with("_m") {
+    if key.ends_with("_s") || key.ends_with("_m") || key.ends_with("_rad") {
         value
     } else {
         1.0 / value
@@ -228,22 +229,23 @@ pub struct BangStudy {
     /// Per observable: standard error of the mean per setting (`NaN` with one run).
     pub se: Vec<Vec<f64>>,
     /// Per observable: fit of |mean - the finest setting's mean| against h (the finest
-    /// setting excluded).
+    /// setting excluded); for the numerical share, whose limit is zero, of the mean itself.
     pub fit: Vec<Option<PowerFit>>,
 }
 
 /// The bang studies of a sweep with bang columns: one per numeric varied key and setting
-/// of the other keys, the `repeats` pooled as the ensemble. Empty if the sweep has no bang
-/// columns or no key takes two settings.
+/// of the other keys, the `repeats` pooled as the ensemble, over the runs whose bang took
+/// time. Empty if the sweep has no bang columns or no key takes two settings.
 pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
     let col = |name: &str| table.numbers(name);
-    let (Some(kin), Some(diss), Some(laid), Some(end), Some(bw), Some(rw)) = (
+    let (Some(kin), Some(diss), Some(laid), Some(end), Some(bw), Some(rw), Some(duration)) = (
         col("bang_kinetic_in_j"),
         col("bang_dissipated_j"),
         col("bang_laid_length_m"),
         col("bang_end_x_m"),
         col("bang_wall_s"),
         col("wall_rolling_s"),
+        col("bang_duration_s"),
     ) else {
         return Vec::new();
     };
@@ -269,7 +271,8 @@ pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
         };
         // Group the runs with a bang by the other (non-repeat) keys, then by this key.
         let mut groups: BTreeMap<String, BTreeMap<u64, Vec<usize>>> = BTreeMap::new();
-        for r in (0..rows).filter(|&r| kin[r].is_finite()) {
+        // A bang given no time (stop.bang_cap_s = 0) has nothing to say.
+        for r in (0..rows).filter(|&r| kin[r].is_finite() && duration[r] > 0.0) {
             let g = keys
                 .iter()
                 .filter(|k| *k != key && !repeats.contains(k))
@@ -294,18 +297,22 @@ pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
             settings.sort_by(|a, b| step_size(key, b.0).total_cmp(&step_size(key, a.0)));
             let h: Vec<f64> = settings.iter().map(|(v, _)| step_size(key, *v)).collect();
             let (mut mean, mut se, mut fit) = (Vec::new(), Vec::new(), Vec::new());
-            for v in &values {
+            for (v, (_, column)) in values.iter().zip(BANG_OBSERVABLES) {
                 let stats: Vec<(f64, f64)> = settings
                     .iter()
                     .map(|(_, rs)| mean_and_se(rs.iter().map(|&r| v[r])))
                     .collect();
                 let m: Vec<f64> = stats.iter().map(|s| s.0).collect();
-                let finest = *m.last().expect("two settings");
-                let change: Vec<f64> = m[..m.len() - 1]
-                    .iter()
-                    .map(|x| (x - finest).abs())
-                    .collect();
-                fit.push(fit_power(&h[..h.len() - 1], &change));
+                if column == "bang_numerical_of" {
+                    fit.push(fit_power(&h, &m));
+                } else {
+                    let finest = *m.last().expect("two settings");
+                    let change: Vec<f64> = m[..m.len() - 1]
+                        .iter()
+                        .map(|x| (x - finest).abs())
+                        .collect();
+                    fit.push(fit_power(&h[..h.len() - 1], &change));
+                }
                 se.push(stats.iter().map(|s| s.1).collect());
                 mean.push(m);
             }
@@ -372,6 +379,18 @@ impl BangStudy {
         let last = self.values.len() - 1;
         let orders: Vec<String> = (0..names.len())
             .map(|k| {
+                if BANG_OBSERVABLES[k].1 == "bang_numerical_of" {
+                    return self.fit[k].map_or_else(
+                        || "-".to_owned(),
+                        |f| {
+                            if f.order_se.is_finite() {
+                                format!("itself: p = {:.2} ± {:.2}", f.order, f.order_se)
+                            } else {
+                                format!("itself: p = {:.2}", f.order)
+                            }
+                        },
+                    );
+                }
                 // The change from the finest setting is noise if within two standard errors.
                 let resolved = (0..last).any(|i| {
                     let d = (self.mean[k][i] - self.mean[k][last]).abs();
@@ -565,6 +584,59 @@ impl SweepAnalysis {
         v
     }
 
+    /// The approach to the bang, run by run, if the sweep has its columns: the peak
+    /// contact-line speed, the equivalent radius there, and the coil's outer radius where
+    /// it lifted off the floor, where its speed left the exact model's by 5 %, and where the
+    /// exact model itself needs a floor that pulls.
+    fn approach_table(&self) -> Option<String> {
+        let t = &self.table;
+        let cols = [
+            "peak_xdot_m_s",
+            "peak_r_m",
+            "lift_off_r_m",
+            "leaves_exact_r_m",
+            "exact_hops_r_m",
+        ];
+        let v: Vec<Vec<f64>> = cols.iter().map(|c| t.numbers(c)).collect::<Option<_>>()?;
+        let keys = t.varied_keys();
+        let mut o = String::new();
+        let _ = writeln!(o, "## The approach to the bang\n");
+        let _ = writeln!(
+            o,
+            "Peak contact-line speed x' while the coil rolls and the equivalent radius \
+             r = R sqrt(1 - f) there; the coil's outer radius where it lifts off the floor \
+             (no upward force for 20 steps), where x' leaves the exact-geometry model's by \
+             more than 5 % (20 steps), and where the exact model needs a floor that pulls.\n"
+        );
+        let _ = writeln!(
+            o,
+            "| {} | peak x' m/s | r at peak mm | lift-off mm | leaves exact mm | exact hops mm |",
+            keys.join(" | ")
+        );
+        let _ = writeln!(o, "|{}---|---|---|---|---|", "---|".repeat(keys.len()));
+        let mm = |x: f64| {
+            if x.is_finite() {
+                format!("{:.2}", 1e3 * x)
+            } else {
+                "-".into()
+            }
+        };
+        for (r, peak) in v[0].iter().enumerate() {
+            let _ = writeln!(
+                o,
+                "| {} | {:.2} | {} | {} | {} | {} |",
+                settings_cells(t, &keys, r),
+                peak,
+                mm(v[1][r]),
+                mm(v[2][r]),
+                mm(v[3][r]),
+                mm(v[4][r])
+            );
+        }
+        let _ = writeln!(o);
+        Some(o)
+    }
+
     /// The Markdown report: the fits, the Pareto front and every run.
     pub fn markdown(&self, title: &str) -> String {
         let t = &self.table;
@@ -635,15 +707,19 @@ impl SweepAnalysis {
             let _ = writeln!(o, "## The final bang\n");
             let _ = writeln!(
                 o,
-                "The bang is chaotic: runs that differ in the fourth digit of a setting end \
-                 differently. Each setting is an ensemble (the repetitions), each cell the mean \
+                "The bang is chaotic: runs whose settings differ by a fraction of a percent \
+                 end differently. Each setting is an ensemble (the repetitions), each cell the mean \
                  ± the standard error of the mean. The last row fits |mean - the finest \
                  setting's mean| against the step h by least squares in log-log, where that \
-                 change exceeds two standard errors somewhere (else: within noise).\n"
+                 change exceeds two standard errors somewhere (else: within noise); the \
+                 numerical share, which an exact solver would make zero, is fitted itself.\n"
             );
             for b in &self.bang {
                 let _ = writeln!(o, "{}", b.markdown());
             }
+        }
+        if let Some(text) = self.approach_table() {
+            o.push_str(&text);
         }
         let _ = writeln!(o, "## Pareto front (error against cost)\n");
         if self.front.is_empty() {
@@ -803,6 +879,7 @@ mod tests {
 
     #[test]
     fn step_size_follows_the_unit() {
+        assert!((step_size("solver.bang_step_rad", 0.15) - 0.15).abs() < 1e-15);
         assert_relative_eq!(step_size("solver.max_dt_s", 1e-3), 1e-3);
         assert_relative_eq!(step_size("discretisation.links_per_turn", 32.0), 1.0 / 32.0);
         assert_relative_eq!(step_size("solver.steps_per_link", 4.0), 0.25);

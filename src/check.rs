@@ -240,6 +240,65 @@ fn sci(v: f64) -> String {
     format!("{v:.2e}")
 }
 
+/// The final bang of each case that had one: what still moves at the end, what ended it,
+/// where what it dissipated went (percent of it), and its wall time over the unroll's.
+fn bang_table(o: &mut String, cases: &[Case]) {
+    let rows: Vec<_> = cases
+        .iter()
+        .filter_map(|c| Some((c, c.report.as_ref()?, c.report.as_ref()?.bang?)))
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    let _ = writeln!(o);
+    let _ = writeln!(
+        o,
+        "{:<20} {:>9} {:>6} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>12}",
+        "final bang",
+        "moving %",
+        "ended",
+        "normal",
+        "frict.",
+        "joints",
+        "freeze",
+        "resid.",
+        "numer.",
+        "bang/unroll"
+    );
+    for (c, r, b) in rows {
+        let d = r.ledger.dissipated_by_bang_j;
+        let pc = |x: f64| format!("{:.1}", 100.0 * x / d);
+        let l = &r.ledger.bang;
+        let ended = match b.ended_by {
+            Some(crate::model::BangEnd::Rest) => "rest",
+            Some(crate::model::BangEnd::Cap) => "cap",
+            None => "cut",
+        };
+        let unroll = r.wall_time_rolling_s;
+        let _ = writeln!(
+            o,
+            "{:<20} {:>9.3} {:>6} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>12.2}",
+            c.name,
+            100.0 * b.still_moving_j / b.kinetic_in_j,
+            ended,
+            pc(l.floor_normal_j),
+            pc(l.floor_friction_j),
+            pc(l.joints_j),
+            pc(l.freeze_j),
+            pc(l.residual_j),
+            pc(l.numerical_j()),
+            (r.wall_time_s - unroll) / unroll
+        );
+    }
+    let _ = writeln!(
+        o,
+        "moving %: kinetic energy still moving at the end, percent of what the bang received; \
+         ended: rest (stop.rest_fraction), cap (stop.bang_cap_s) or cut (the run stopped \
+         first); normal .. resid.: what the bang dissipated by mechanism, percent of it; \
+         numer.: |joints| + |resid.|; bang/unroll: the bang's engine wall time over the unroll's."
+    );
+}
+
 /// The table of cases, then each case's stated reason and where its references stop
 /// applying, then any output problem.
 pub fn table(cases: &[Case]) -> String {
@@ -286,9 +345,11 @@ pub fn table(cases: &[Case]) -> String {
     let _ = writeln!(
         o,
         "joint m, penetr. m: largest joint separation and floor penetration; E drift: largest \
-         (E - E0)/E0 (0: the energy never rose); wall s: wall time of the engine steps; \
-         spin: fastest body spin."
+         E - E0 over the energy scale (the largest of |E0|, MgR and the kinetic energy into the \
+         bang; 0: the energy never rose); wall s: wall time of the engine steps; spin: fastest \
+         body spin."
     );
+    bang_table(&mut o, cases);
     for c in cases {
         let _ = writeln!(
             o,

@@ -18,6 +18,7 @@ use std::time::Instant;
 use anyhow::Context as _;
 use rayon::prelude::*;
 
+use crate::guard::LimitKind;
 use crate::output::write_atomic;
 use crate::overrides::{Override, OverrideSyntaxError, check_key, scene_with_overrides};
 use crate::run::{RunReport, milestone_radii, run};
@@ -207,6 +208,9 @@ pub fn result_columns(milestone_labels: &[String]) -> Vec<String> {
             "max_energy_rise_rel",
             "peak_xdot_m_s",
             "peak_r_m",
+            "lift_off_r_m",
+            "leaves_exact_r_m",
+            "exact_hops_r_m",
         ]
         .iter()
         .map(|s| (*s).to_owned()),
@@ -293,6 +297,18 @@ pub fn result_cells(report: &RunReport, jobs: usize) -> Vec<String> {
     c.push(num(report.max_energy_rise_rel));
     c.push(num(report.approach.peak_xdot_m_s));
     c.push(num(report.approach.peak_r_m));
+    for kind in [
+        LimitKind::LiftOff,
+        LimitKind::LeavesExact,
+        LimitKind::ExactModelHops,
+    ] {
+        let r = report
+            .reference_limits
+            .iter()
+            .find(|l| l.kind == kind && l.t_s.is_some())
+            .map(|l| l.r_m);
+        c.push(opt(r));
+    }
     c.extend(bang_cells(report));
     let status = if l.bang_time_s.is_some() && report.sim_time_s < report.scene.stop.max_time_s {
         "ok"

@@ -14,7 +14,15 @@
 #   yoga-iter     yoga mat: convergence in the solver iterations
 #   thin-pareto   thin tape: resolution x time step, against eq. (7)
 #   scaling       both scenes: wall time per step and per simulated second against links
-#   yoga-run      the yoga mat's run plots (motion.svg, energy.svg) into docs/yoga-mat/
+#   bang-links    yoga mat's final bang against the resolution (links per turn)
+#   bang-step     ... against its step (solver.bang_step_rad)
+#   bang-iter     ... against its solver iterations (solver.bang_iterations)
+#   bang-piece    ... against the length of its pieces (solver.bang_piece_m)
+#   bang-turns    ... released with one turn left (r = b, the shipped scene) or two (r = 2b)
+#                 (each setting an ensemble of 8 pushes, 0.300-0.307 m/s: the bang is chaotic)
+#   approach      yoga mat rolled to its last link: where x' stops diverging, against b and
+#                 links per turn
+#   yoga-run      the yoga mat's run plots (motion, energy, approach) into docs/yoga-mat/
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release --locked --quiet
@@ -24,6 +32,9 @@ yoga=scenes/yoga-mat.toml
 thin=scenes/thin-tape.toml
 # The final bang is not part of the unroll that these figures are about: give it no time.
 nobang=(--vary stop.bang_cap_s=0)
+# The bang studies: eight pushes, 0.300 to 0.307 m/s, make each setting an ensemble.
+pushes=(--vary push.contact_speed_m_s=0.300,0.301,0.302,0.303,0.304,0.305,0.306,0.307)
+bang_report=(--repeat-key push.contact_speed_m_s --no-convergence)
 
 study() { # name scene [sweep args...] -- [report args...]
   local name=$1 scene=$2
@@ -100,15 +111,40 @@ run_study() {
     study scaling-thin $thin --vary discretisation.links_per_turn=7,33,333 "${fixed[@]}" \
       -- --title "thin tape, cost against links" --converge discretisation.links_per_turn \
       --repeat-key name ;;
+  bang-links)
+    study bang-links $yoga "${pushes[@]}" --vary discretisation.links_per_turn=16,24,32,48,64 \
+      -- --title "yoga mat, final bang, resolution" "${bang_report[@]}" ;;
+  bang-step)
+    study bang-step $yoga "${pushes[@]}" --vary solver.bang_step_rad=0.3,0.15,0.075,0.0375 \
+      -- --title "yoga mat, final bang, step" "${bang_report[@]}" ;;
+  bang-iter)
+    study bang-iter $yoga "${pushes[@]}" --vary solver.bang_iterations=6,12,24,48 \
+      -- --title "yoga mat, final bang, solver iterations" "${bang_report[@]}" ;;
+  bang-piece)
+    study bang-piece $yoga "${pushes[@]}" \
+      --vary solver.bang_piece_m=0.01,0.005,0.0025,0.00125 \
+      -- --title "yoga mat, final bang, length of its pieces" "${bang_report[@]}" ;;
+  bang-turns)
+    study bang-turns $yoga "${pushes[@]}" --vary stop.bang_radius_m=0.01,0.005 \
+      -- --title "yoga mat, final bang, turns left at the release" "${bang_report[@]}" ;;
+  approach)
+    # Rolled to the last link (a bang radius of 1 um): nothing cuts the approach short but
+    # the coil itself.
+    study approach $yoga --vary tape.thickness_m=0.0025,0.005,0.01 \
+      --vary discretisation.links_per_turn=16,32,64,128 \
+      --vary stop.bang_radius_m=0.000001 --vary stop.bang_cap_s=0 \
+      -- --title "yoga mat, approach to the bang" --no-convergence ;;
   yoga-run)
     echo "== yoga-run" >&2
     "$bin" run $yoga --out runs/yoga-mat > /dev/null
     "$bin" plot runs/yoga-mat > /dev/null
     mkdir -p docs/yoga-mat
-    cp runs/yoga-mat/motion.svg runs/yoga-mat/energy.svg docs/yoga-mat/ ;;
+    cp runs/yoga-mat/motion.svg runs/yoga-mat/energy.svg runs/yoga-mat/approach.svg \
+      docs/yoga-mat/ ;;
   *) echo "unknown study $1" >&2; exit 2 ;;
   esac
 }
 
-all=(yoga-pareto yoga-links yoga-dt yoga-rule yoga-rule-fine yoga-iter thin-pareto scaling yoga-run)
+all=(yoga-pareto yoga-links yoga-dt yoga-rule yoga-rule-fine yoga-iter thin-pareto scaling
+     bang-links bang-step bang-iter bang-piece bang-turns approach yoga-run)
 for s in "${@:-${all[@]}}"; do run_study "$s"; done
