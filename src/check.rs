@@ -267,7 +267,14 @@ fn bang_table(o: &mut String, cases: &[Case]) {
     );
     for (c, r, b) in rows {
         let d = r.ledger.dissipated_by_bang_j;
-        let pc = |x: f64| format!("{:.1}", 100.0 * x / d);
+        let split = r.ledger.bang_split_meaningful();
+        let pc = |x: f64| {
+            if split {
+                format!("{:.1}", 100.0 * x / d)
+            } else {
+                "-".to_owned()
+            }
+        };
         let l = &r.ledger.bang;
         let ended = match b.ended_by {
             Some(crate::model::BangEnd::Rest) => "rest",
@@ -294,7 +301,8 @@ fn bang_table(o: &mut String, cases: &[Case]) {
         o,
         "moving %: kinetic energy still moving at the end, percent of what the bang received; \
          ended: rest (stop.rest_fraction), cap (stop.bang_cap_s) or cut (the run stopped \
-         first); normal .. resid.: what the bang dissipated by mechanism, percent of it; \
+         first); normal .. resid.: what the bang dissipated by mechanism, percent of it (-: \
+         under 1 % of the energy scale, too little to split); \
          numer.: |joints| + |resid.|; bang/unroll: the bang's engine wall time over the unroll's."
     );
 }

@@ -268,6 +268,9 @@ pub struct Applicability {
     a_m: f64,
     push_speed_m_s: f64,
     outer_radius_m: f64,
+    /// Whether the tape lays onto a floor; the notes below all assume one (a tape hanging
+    /// from a fixed axis, App. E, has references of its own).
+    on_floor: bool,
     /// The exact model sliding on a frictionless floor, for where its contact line is.
     sliding: Option<ExactGeometry>,
     /// The exact model rolling, for its contact-line speed.
@@ -290,6 +293,7 @@ impl Applicability {
             a_m: Spiral::wound(t.outer_radius_m, t.thickness_m, t.core_radius_m).a_m,
             push_speed_m_s: scene.push_speed_m_s,
             outer_radius_m: t.outer_radius_m,
+            on_floor: !scene.fixed_axis,
             sliding: exact.is_sliding().then(|| exact.clone()),
             rolling: (!exact.is_sliding()).then(|| exact.clone()),
             leave_steps: 0,
@@ -321,10 +325,10 @@ impl Applicability {
         self.a_m * obs.psi_low + 0.5 * self.thickness_m
     }
 
-    /// Reads one step; `xdot_m_s` is the contact-line speed. Only the rolling phase is
-    /// judged: the references end where the final bang begins.
+    /// Reads one step; `xdot_m_s` is the contact-line speed. Only the rolling phase on a
+    /// floor is judged: the references end where the final bang begins.
     pub fn observe(&mut self, obs: &Observation, health: &Health, xdot_m_s: f64) {
-        if obs.phase != Phase::Rolling {
+        if obs.phase != Phase::Rolling || !self.on_floor {
             return;
         }
         let b = self.thickness_m;

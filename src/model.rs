@@ -280,6 +280,8 @@ pub struct Model {
     pin_lift_m: f64,
     /// Softness of every joint (see `Solver::joint_hz`).
     joint_softness: SpringCoefficients<Real>,
+    /// Softness of every joint from the release on (see `Solver::bang_joint_hz`).
+    bang_joint_softness: SpringCoefficients<Real>,
     friction: f64,
     /// Gravity across the floor, `g cos(alpha)`, pulling towards it (m/s^2).
     g: f64,
@@ -515,6 +517,10 @@ impl Model {
             pin_lift_m: PIN_LIFT_PER_RADIUS * tape.outer_radius_m,
             joint_softness: SpringCoefficients::new(
                 scene.solver.joint_hz,
+                SpringCoefficients::<Real>::joint_defaults().damping_ratio,
+            ),
+            bang_joint_softness: SpringCoefficients::new(
+                scene.solver.bang_joint_hz,
                 SpringCoefficients::<Real>::joint_defaults().damping_ratio,
             ),
             friction: scene.friction,
@@ -1026,6 +1032,11 @@ impl Model {
         let (kinetic_in, potential_in) = self.energy();
         let before = kinetic_in + potential_in;
         self.phase = Phase::Bang;
+        // From here on every joint, old and new, has the bang's softness.
+        self.joint_softness = self.bang_joint_softness;
+        for (_, j) in self.world.impulse_joints.iter_mut() {
+            j.data.softness = self.bang_joint_softness;
+        }
         if let Some(prev) = self.free.back().copied() {
             self.unpin_from_coil(prev.body, coil);
         }

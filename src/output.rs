@@ -331,34 +331,45 @@ fn bang_summary(o: &mut String, report: &RunReport, bang: &crate::run::BangRepor
         bang.kinetic_in_j, bang.top_speed_m_s, bang.peak_floor_force_n, bang.floor_impulse_n_s
     );
     let d = l.dissipated_by_bang_j;
-    let of = |x: f64| {
-        if d.abs() > 0.0 {
-            100.0 * x / d
-        } else {
-            f64::NAN
-        }
-    };
     let b = &l.bang;
-    let _ = writeln!(
-        o,
-        "  dissipated {d:.5} J, measured where it happened: floor impacts {:.5} J ({:.1} %), \
-         floor friction {:.5} J ({:.1} %), freezing {:.5} J ({:.2} %);",
-        b.floor_normal_j,
-        of(b.floor_normal_j),
-        b.floor_friction_j,
-        of(b.floor_friction_j),
-        b.freeze_j,
-        of(b.freeze_j)
-    );
-    let _ = writeln!(
-        o,
-        "  numerical (zero for ideal joints and an exact step): joints {:.5} J ({:.1} %), residual \
-         {:.5} J ({:.1} %)",
-        b.joints_j,
-        of(b.joints_j),
-        b.residual_j,
-        of(b.residual_j)
-    );
+    if l.bang_split_meaningful() {
+        let of = |x: f64| 100.0 * x / d;
+        let _ = writeln!(
+            o,
+            "  dissipated {d:.5} J, measured where it happened: floor impacts {:.5} J ({:.1} %), \
+             floor friction {:.5} J ({:.1} %), freezing {:.5} J ({:.2} %);",
+            b.floor_normal_j,
+            of(b.floor_normal_j),
+            b.floor_friction_j,
+            of(b.floor_friction_j),
+            b.freeze_j,
+            of(b.freeze_j)
+        );
+        let _ = writeln!(
+            o,
+            "  numerical (zero for ideal joints and an exact step): joints {:.5} J ({:.1} %), \
+             residual {:.5} J ({:.1} %)",
+            b.joints_j,
+            of(b.joints_j),
+            b.residual_j,
+            of(b.residual_j)
+        );
+    } else {
+        let _ = writeln!(
+            o,
+            "  dissipated {d:.5} J ({:.3} % of S): too little to split by mechanism (under {} %)",
+            100.0 * d / l.energy_scale_j,
+            100.0 * crate::run::BANG_SPLIT_MIN_OF_SCALE
+        );
+    }
+    if report.scene.fixed_axis {
+        let _ = writeln!(
+            o,
+            "  the tape hangs from its axis with no floor to stop it: still moving {:.3e} J",
+            bang.still_moving_j
+        );
+        return;
+    }
     let short = bang.laid_length_m - bang.end_x_m;
     let _ = writeln!(
         o,

@@ -171,6 +171,20 @@ pub struct Ledger {
     pub bang_time_s: Option<f64>,
 }
 
+/// Below this fraction of the energy scale, what the bang dissipated is too little to split
+/// by mechanism: the shares would be ratios of rounding (a tape swinging from an axis
+/// dissipates ~1e-4 of it).
+pub const BANG_SPLIT_MIN_OF_SCALE: f64 = 0.01;
+
+impl Ledger {
+    /// Whether the bang dissipated enough, against the energy scale, for its split by
+    /// mechanism to mean something ([`BANG_SPLIT_MIN_OF_SCALE`]).
+    #[must_use]
+    pub fn bang_split_meaningful(&self) -> bool {
+        self.dissipated_by_bang_j.abs() >= BANG_SPLIT_MIN_OF_SCALE * self.energy_scale_j
+    }
+}
+
 /// The final bang: what it received, how violent it was, how long it took, where the tape
 /// ended.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -205,8 +219,10 @@ pub struct Approach {
     pub peak_xdot_m_s: f64,
     /// Continuum-equivalent radius `R sqrt(1 - f)` there (m).
     pub peak_r_m: f64,
-    /// The exact-geometry model's contact-line speed at the same laid fraction (m/s).
-    pub peak_xdot_geo_m_s: f64,
+    /// The exact-geometry model's contact-line speed at the same laid fraction (m/s); `None`
+    /// on a frictionless floor, where the model slides and has no rolling contact line.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_xdot_geo_m_s: Option<f64>,
     /// The exact-geometry model's contact-line speed against the equivalent radius,
     /// `[r (m), x' (m/s)]`, down to the bang radius (empty on a frictionless floor, where
     /// the contact line slides).
@@ -437,7 +453,7 @@ pub fn run_until(
     let mut approach = Approach {
         peak_xdot_m_s: scene.push_speed_m_s,
         peak_r_m: big_r,
-        peak_xdot_geo_m_s: scene.push_speed_m_s,
+        peak_xdot_geo_m_s: (!refs.exact.is_sliding()).then_some(scene.push_speed_m_s),
         exact_curve: Vec::new(),
         eq7_curve: Vec::new(),
     };
@@ -545,7 +561,8 @@ pub fn run_until(
         if obs.phase == Phase::Rolling && prev.is_some() && xdot > approach.peak_xdot_m_s {
             approach.peak_xdot_m_s = xdot;
             approach.peak_r_m = big_r * (1.0 - obs.laid_fraction).max(0.0).sqrt();
-            approach.peak_xdot_geo_m_s = refs.exact.xdot_at_psi(obs.psi_low);
+            approach.peak_xdot_geo_m_s =
+                (!refs.exact.is_sliding()).then(|| refs.exact.xdot_at_psi(obs.psi_low));
         }
         let done = obs.phase == Phase::Done;
         let timed_out = obs.t_s >= scene.stop.max_time_s;
