@@ -69,7 +69,7 @@ pub struct BangRecord {
     /// What ended the bang, once it has ended.
     pub end: Option<BangEnd>,
 }
-use work::{BodyState, ChainLink};
+use work::{BodyState, Moved};
 
 /// Where the energy went, each part measured where it happens (J).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
@@ -1128,26 +1128,19 @@ impl Model {
     /// fastest point, the floor's impulse; and ends the bang once it has come to rest.
     fn book_bang_step(&mut self, before: &[BodyState], lost_j: f64, kinetic: f64, dt: f64) {
         self.ledger.bang_j += lost_j;
-        let Some(first) = self.free.front() else {
+        if self.free.is_empty() {
             // Everything is frozen: at rest.
             self.bang.ledger.residual_j += lost_j;
             self.end_bang(BangEnd::Rest);
             return;
-        };
-        let links: Vec<ChainLink<'_>> = self
+        }
+        let bodies: Vec<Moved<'_>> = self
             .free
             .iter()
             .zip(before)
-            .map(|(p, &before)| {
-                let body = &self.world.bodies[p.body];
-                // Anchors from the centre of mass, in the body's axes.
-                let com = body.mass_properties().local_mprops.local_com;
-                ChainLink {
-                    body,
-                    before,
-                    near: self.local[p.first][0] - com,
-                    far: self.local[p.last][1] - com,
-                }
+            .map(|(p, &before)| Moved {
+                body: &self.world.bodies[p.body],
+                before,
             })
             .collect();
         let floor: Vec<_> =
@@ -1159,7 +1152,7 @@ impl Model {
                     Some((i, c))
                 })
                 .collect();
-        let work = work::step_work(&links, first.first > 0, &floor, self.world.gravity, dt);
+        let work = work::step_work(&bodies, &floor, self.world.gravity, dt);
         let impulse: f64 = floor.iter().map(|(_, c)| c.normal.length()).sum();
         // Potential energy above lying flat on the floor: the weight across the floor times
         // the centre of mass's height above where it would lie (never negative: on a fixed

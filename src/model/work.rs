@@ -3,22 +3,23 @@
 //!
 //! For one body over one step, with `P` the total impulse on it and `v-`, `v+` its velocity
 //! before and after, the change of kinetic energy is exactly `P . (v- + v+) / 2` (kinetic
-//! energy is quadratic in the velocity). Splitting `P` into the impulses of the floor
-//! contacts (read from the engine, summed over its substeps), gravity and the joints, and
-//! each impulse's torque by its lever arm, gives each constraint's work as its impulse
-//! times the mean velocity of the point it acts on:
+//! energy is quadratic in the velocity), and likewise for the angular impulse. Splitting
+//! `P` into the impulses of the floor contacts (read from the engine, summed over its
+//! substeps), gravity and the joints gives each one's work as its impulse times the mean
+//! velocity of the point it acts on:
 //!
 //! ```text
 //! W_c = P_c . (u_c- + u_c+) / 2
 //! ```
 //!
-//! The engine does not keep the joints' impulses summed over a step, so they are recovered
-//! from the links' momentum balance, walking the chain from its free end inward: the
-//! innermost link has one joint, and each joint's impulse is what its link's momentum change
-//! leaves after gravity, the floor and the next joint. An ideal rigid joint does no work
-//! (its two anchors move together); what the joints do work on is their compliance, drift
-//! and correction: the numerical part. What the split does not explain (a lever arm turning
-//! within the step, the integration of gravity, position corrections) is the residual.
+//! Nothing else acts on a link, so the joints' work on it is its kinetic-energy change less
+//! the work of gravity and of the floor: exact, without the joints' impulses (which the
+//! engine does not keep summed over a step) or their lever arms, which turn within the step.
+//! An ideal rigid joint does no work (its two anchors move together); what the joints do
+//! work on is their compliance, drift and correction: the numerical part. The residual is
+//! what the potential energy's change leaves of gravity's work (the integrator moves a body
+//! by its velocity after the step, not the mean) and what the floor's lever arms turning
+//! within a step make of its split.
 //!
 //! This is bookkeeping over what the engine did, not a model of its own: it never changes
 //! a body.
@@ -64,7 +65,7 @@ impl BangLedger {
 pub(super) struct BodyState {
     pub linvel: Vector,
     pub angvel: f64,
-    pub rotation: Rotation,
+    pub kinetic_j: f64,
 }
 
 impl BodyState {
@@ -72,7 +73,7 @@ impl BodyState {
         Self {
             linvel: body.linvel(),
             angvel: body.angvel(),
-            rotation: *body.rotation(),
+            kinetic_j: body.kinetic_energy(),
         }
     }
 
@@ -143,18 +144,14 @@ pub(super) fn floor_impulses(
         })
 }
 
-/// A link of the chain as the work split sees it: its mass, its state before and after the
-/// step, and its joints' anchors in its own frame (near node, far node).
-pub(super) struct ChainLink<'a> {
+/// A body of the tape as the work split sees it: its state before the step, and itself
+/// after it.
+pub(super) struct Moved<'a> {
     pub body: &'a RigidBody,
     pub before: BodyState,
-    /// Anchor of the joint towards the laid end, in the body frame.
-    pub near: Vector,
-    /// Anchor of the joint towards the free end, in the body frame.
-    pub far: Vector,
 }
 
-/// Work done on the chain during one step, by mechanism (J; positive = energy given to the
+/// Work done on the tape during one step, by mechanism (J; positive = energy given to the
 /// tape).
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct StepWork {
@@ -163,55 +160,35 @@ pub(super) struct StepWork {
     pub joints_j: f64,
 }
 
-/// The work of one step: `links` run from the laid end to the free end; `pinned` says
-/// whether the first is held to the world at its near node; `floor` are the floor's
-/// impulses of the step, by index into `links`.
+/// The work of one step on `bodies`; `floor` are the floor's impulses of the step, by index
+/// into `bodies`.
 pub(super) fn step_work(
-    links: &[ChainLink<'_>],
-    pinned: bool,
+    bodies: &[Moved<'_>],
     floor: &[(usize, FloorImpulse)],
     gravity: Vector,
     dt: f64,
 ) -> StepWork {
     let (mut normal_w, mut friction_w) = (0.0, 0.0);
-    let mut contact_p = vec![Vector::ZERO; links.len()];
+    let mut floor_w = vec![0.0; bodies.len()];
     for &(i, c) in floor {
-        let link = &links[i];
-        let u =
-            0.5 * (link.before.velocity_at(c.arm) + BodyState::of(link.body).velocity_at(c.arm));
+        let m = &bodies[i];
+        let u = 0.5 * (m.before.velocity_at(c.arm) + BodyState::of(m.body).velocity_at(c.arm));
         normal_w += c.normal.dot(u);
         friction_w += c.friction.dot(u);
-        contact_p[i] += c.normal + c.friction;
+        floor_w[i] += (c.normal + c.friction).dot(u);
     }
-    // Joint impulses from the momentum balance, free end first: the impulse on link i at
-    // its near node is what its momentum change leaves after gravity, the floor and the
-    // impulse of the joint at its far node (minus the impulse on link i + 1 at its near node).
-    let mut joint_w = 0.0;
-    let mut far_impulse = Vector::ZERO;
-    for (i, link) in links.iter().enumerate().rev() {
-        let body = link.body;
-        let dp = (body.linvel() - link.before.linvel) * body.mass();
-        let near_impulse = dp - gravity * (body.mass() * dt) - contact_p[i] - far_impulse;
-        let after = BodyState::of(body);
-        let anchor_u = |anchor: Vector| {
-            0.5 * (link.before.velocity_at(link.before.rotation * anchor)
-                + after.velocity_at(after.rotation * anchor))
-        };
-        let u_near = anchor_u(link.near);
-        let held_u = if i > 0 {
-            let prev = &links[i - 1];
-            let prev_after = BodyState::of(prev.body);
-            0.5 * (prev.before.velocity_at(prev.before.rotation * prev.far)
-                + prev_after.velocity_at(prev_after.rotation * prev.far))
-        } else if pinned {
-            Vector::ZERO
-        } else {
-            // The tape's outer end: no joint, whatever is left is the residual's.
-            u_near
-        };
-        joint_w += near_impulse.dot(u_near - held_u);
-        far_impulse = -near_impulse;
-    }
+    // The joints' impulses are the rest of each body's momentum change, so their work is
+    // the rest of its kinetic-energy change: exact, with no lever arm to guess.
+    let joint_w: f64 = bodies
+        .iter()
+        .zip(&floor_w)
+        .map(|(m, &floor)| {
+            let body = m.body;
+            let gravity_w =
+                (gravity * (body.mass() * dt)).dot(0.5 * (m.before.linvel + body.linvel()));
+            body.kinetic_energy() - m.before.kinetic_j - gravity_w - floor
+        })
+        .sum();
     StepWork {
         normal_j: normal_w,
         friction_j: friction_w,
