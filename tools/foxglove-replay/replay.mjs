@@ -149,12 +149,13 @@ try {
   // Close the sidebar to give the panels the room, then play to just before the bang.
   await page.locator('[data-sidebar-key="layouts"]').click();
   await page.waitForTimeout(2000);
-  for (const title of ["coil radius r", "contact-line speed", "energy ledger", "floor forces"]) {
+  for (const title of ["coil radius r", "contact-line speed", "energy ledger", "floor forces",
+    "final bang"]) {
     await page.getByText(title).first().waitFor({ timeout: 20000 });
   }
   console.log("panels of the layout shown");
   // Dismiss the 3D panel's first-use hint, then seek into the unroll by clicking the time
-  // bar at SEEK_FRACTION of its length (default 0.84: about 1.95 s of the yoga mat's 2.32 s).
+  // bar at SEEK_FRACTION of its length (default 0.84: about 2.04 s of the yoga mat's 2.44 s).
   const hint = page.getByText("Open settings to configure topics and layers.");
   if (await hint.count()) {
     await hint.locator("xpath=..").getByRole("button").first().click().catch(() => {});
