@@ -3,7 +3,7 @@
 # (sweep.csv, report.md and the SVGs). Each study is one `uncoil sweep` and one
 # `uncoil sweep-report`; runs go one at a time (--jobs 1) so that each run's wall time is
 # its own, not shared with another run.
-# Usage: tools/sweeps.sh [STUDY ...]   (default: all; 1-3 minutes on 2 cores)
+# Usage: tools/sweeps.sh [STUDY ...]   (default: all; about 25 minutes on 2 cores)
 #        REPORT_ONLY=1 tools/sweeps.sh [STUDY ...]   redraws the reports from the sweep.csv files
 #   yoga-pareto   yoga mat: resolution x adaptive step rule x solver iterations
 #   yoga-links    yoga mat: convergence in the resolution (links per turn)
@@ -20,6 +20,9 @@
 #   bang-piece    ... against the length of its pieces (solver.bang_piece_m)
 #   bang-turns    ... released with one turn left (r = b, the shipped scene) or two (r = 2b)
 #                 (each setting an ensemble of 8 pushes, 0.300-0.307 m/s: the bang is chaotic)
+#   bang-thin-piece  thin tape's final bang against the length of its pieces (b, 5b, 10b)
+#   bang-thin-iter   ... with 1 mm pieces, against its solver iterations
+#                 (each setting an ensemble of 8 pushes, 0.100-0.107 m/s; ~15 minutes)
 #   approach      yoga mat rolled to its last link: where x' stops diverging, against b and
 #                 links per turn
 #   yoga-run      the yoga mat's run plots (motion, energy, approach) into docs/yoga-mat/
@@ -34,6 +37,7 @@ thin=scenes/thin-tape.toml
 nobang=(--vary stop.bang_cap_s=0)
 # The bang studies: eight pushes, 0.300 to 0.307 m/s, make each setting an ensemble.
 pushes=(--vary push.contact_speed_m_s=0.300,0.301,0.302,0.303,0.304,0.305,0.306,0.307)
+thin_pushes=(--vary push.contact_speed_m_s=0.100,0.101,0.102,0.103,0.104,0.105,0.106,0.107)
 bang_report=(--repeat-key push.contact_speed_m_s --no-convergence)
 
 study() { # name scene [sweep args...] -- [report args...]
@@ -127,6 +131,14 @@ run_study() {
   bang-turns)
     study bang-turns $yoga "${pushes[@]}" --vary stop.bang_radius_m=0.01,0.005 \
       -- --title "yoga mat, final bang, turns left at the release" "${bang_report[@]}" ;;
+  bang-thin-piece)
+    study bang-thin-piece $thin "${thin_pushes[@]}" \
+      --vary solver.bang_piece_m=0.0001,0.0005,0.001 \
+      -- --title "thin tape, final bang, length of its pieces" "${bang_report[@]}" ;;
+  bang-thin-iter)
+    study bang-thin-iter $thin "${thin_pushes[@]}" --vary solver.bang_piece_m=0.001 \
+      --vary solver.bang_iterations=24,48,96 \
+      -- --title "thin tape, final bang, 1 mm pieces, solver iterations" "${bang_report[@]}" ;;
   approach)
     # Rolled to the last link (a bang radius of 1 um): nothing cuts the approach short but
     # the coil itself.
@@ -146,5 +158,6 @@ run_study() {
 }
 
 all=(yoga-pareto yoga-links yoga-dt yoga-rule yoga-rule-fine yoga-iter thin-pareto scaling
-     bang-links bang-step bang-iter bang-piece bang-turns approach yoga-run)
+     bang-links bang-step bang-iter bang-piece bang-turns bang-thin-piece bang-thin-iter approach
+     yoga-run)
 for s in "${@:-${all[@]}}"; do run_study "$s"; done
