@@ -3,7 +3,8 @@
 # (sweep.csv, report.md and the SVGs). Each study is one `uncoil sweep` and one
 # `uncoil sweep-report`; runs go one at a time (--jobs 1) so that each run's wall time is
 # its own, not shared with another run.
-# Usage: tools/sweeps.sh [STUDY ...]   (default: all; about 25 minutes on 2 cores)
+# Usage: tools/sweeps.sh [STUDY ...]   (default: all; the thin tape's two bang studies
+#                                       take 14 minutes of it on 2 cores)
 #        REPORT_ONLY=1 tools/sweeps.sh [STUDY ...]   redraws the reports from the sweep.csv files
 #   yoga-pareto   yoga mat: resolution x adaptive step rule x solver iterations
 #   yoga-links    yoga mat: convergence in the resolution (links per turn)
@@ -22,7 +23,7 @@
 #                 (each setting an ensemble of 8 pushes, 0.300-0.307 m/s: the bang is chaotic)
 #   bang-thin-piece  thin tape's final bang against the length of its pieces (b, 5b, 10b)
 #   bang-thin-iter   ... with 1 mm pieces, against its solver iterations
-#                 (each setting an ensemble of 8 pushes, 0.100-0.107 m/s; ~15 minutes)
+#                 (each setting an ensemble of 8 pushes, 0.100-0.107 m/s)
 #   approach      yoga mat rolled to its last link: where x' stops diverging, against b and
 #                 links per turn
 #   yoga-run      the yoga mat's run plots (motion, energy, approach) into docs/yoga-mat/
