@@ -879,7 +879,7 @@ impl Model {
         if self.phase != Phase::Rolling {
             // Just above the contact plane: on or below it, the floor pushes the pinned node
             // out while the pin holds it, and the solver's two impulses grow against each
-            // other without bound (kilonewtons on a resting piece).
+            // other without bound.
             node.y = node.y.max(self.half_b + self.pin_lift_m);
         }
         let joint = RevoluteJointBuilder::new()
