@@ -76,36 +76,137 @@ pub fn sim_sign_change(samples: &[Sample], f_max: f64) -> Option<f64> {
     None
 }
 
+/// Mean and standard deviation about a least-squares line in `f` of `value` over the
+/// rolling-phase samples within `half` of `f`: the spread that is not the trend.
+pub fn window_spread(
+    samples: &[Sample],
+    f: f64,
+    half: f64,
+    value: impl Fn(&Sample) -> f64,
+) -> Option<(f64, f64)> {
+    let points: Vec<(f64, f64)> = samples
+        .iter()
+        .filter(|s| (s.laid_fraction - f).abs() <= half)
+        .map(|s| (s.laid_fraction, value(s)))
+        .filter(|p| p.1.is_finite())
+        .collect();
+    if points.len() < 3 {
+        return None;
+    }
+    #[allow(clippy::cast_precision_loss)]
+    let n = points.len() as f64;
+    let (mx, my) = points
+        .iter()
+        .fold((0.0, 0.0), |(a, b), p| (a + p.0 / n, b + p.1 / n));
+    let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    let ss: f64 = points
+        .iter()
+        .map(|p| (p.1 - my - slope * (p.0 - mx)).powi(2))
+        .sum();
+    Some((my, (ss / (n - 2.0)).sqrt()))
+}
+
+/// The forces compared, each as (label, simulation's column, exact model's column).
+type ForcePair = (&'static str, fn(&Sample) -> f64, fn(&Sample) -> f64);
+
+const FORCE_PAIRS: [ForcePair; 4] = [
+    ("N_tot", |s| s.n_tot_n, |s| s.n_tot_geo_n),
+    ("F_tot", |s| s.f_tot_n, |s| s.f_tot_geo_n),
+    ("F", |s| s.f_floor_n, |s| s.f_floor_geo_n),
+    ("F_int", |s| s.f_int_n, |s| s.f_int_geo_n),
+];
+
 /// The constraint-force table of one run: the simulation's `N_tot`, `F_tot` (momentum
-/// balance) and floor contact forces beside the case's analytic forms.
+/// balance of the moving part), the floor's `F` on the coil and the laid tape's `F_int`
+/// beside the exact-geometry model's and the paper's forms; their gaps and spread in
+/// units of `M g`; eq. (11) against eq. (30) on a level floor.
 pub fn force_table(report: &RunReport, samples: &[Sample]) -> String {
     let mut o = String::new();
-    let Some(forces) = force_reference(&report.scene) else {
+    let scene = &report.scene;
+    let forces = force_reference(scene);
+    let has_geo = samples.iter().any(|s| s.n_tot_geo_n.is_finite());
+    if forces.is_none() && !has_geo {
         let _ = writeln!(
             o,
-            "Constraint forces: no analytic form for this case (a frictionless floor exerts no \
+            "Constraint forces: no reference for this case (a frictionless floor exerts no \
              horizontal force; a fixed axis has no floor)."
         );
         return o;
-    };
+    }
+    let mg = scene.tape.mass_kg * scene.g_m_s2;
     let _ = writeln!(
         o,
-        "| f | N_tot sim N | N_tot ref N | F_tot sim N | F_tot ref N | floor contact N, F (sim) N |"
+        "Constraint forces (N), the simulation's averaged over f +- {FORCE_WINDOW}: the \
+         simulation (sim), the exact-geometry model (exact) and the paper's form (paper: eq. 9 \
+         per ERRATA A4, eq. 11 = eq. 30 line 1 per A6, or the case's own).\n"
     );
-    let _ = writeln!(o, "|---|---|---|---|---|---|");
+    let _ = writeln!(
+        o,
+        "| f | N_tot sim | exact | paper | F_tot sim | exact | paper | F sim | exact | F_int sim | exact |"
+    );
+    let _ = writeln!(o, "|---|---|---|---|---|---|---|---|---|---|---|");
     let show = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.4}"));
+    let (mut gap, mut spread) = ([None::<f64>; 4], [None::<f64>; 4]);
     for f in FORCE_FRACTIONS {
         let mean = |g: fn(&Sample) -> f64| window_mean(samples, f, FORCE_WINDOW, g);
-        let reference = forces(f);
+        let paper = forces.as_ref().and_then(|r| r(f));
+        for (k, (_, sim, geo)) in FORCE_PAIRS.iter().enumerate() {
+            if let (Some(a), Some(b)) = (mean(*sim), mean(*geo)) {
+                gap[k] = Some(gap[k].unwrap_or(0.0).max((a - b).abs() / mg));
+            }
+            if let Some((_, sd)) = window_spread(samples, f, FORCE_WINDOW, sim) {
+                spread[k] = Some(spread[k].unwrap_or(0.0).max(sd / mg));
+            }
+        }
         let _ = writeln!(
             o,
-            "| {f} | {} | {} | {} | {} | {}, {} |",
+            "| {f} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             show(mean(|s| s.n_tot_n)),
-            show(reference.map(|r| r.0)),
+            show(mean(|s| s.n_tot_geo_n)),
+            show(paper.map(|r| r.0)),
             show(mean(|s| s.f_tot_n)),
-            show(reference.map(|r| r.1)),
-            show(mean(|s| s.normal_n)),
-            show(mean(|s| s.friction_n)),
+            show(mean(|s| s.f_tot_geo_n)),
+            show(paper.map(|r| r.1)),
+            show(mean(|s| s.f_floor_n)),
+            show(mean(|s| s.f_floor_geo_n)),
+            show(mean(|s| s.f_int_n)),
+            show(mean(|s| s.f_int_geo_n)),
+        );
+    }
+    let pct = |v: Option<f64>| v.map_or("-".into(), |v| format!("{:.2} %", 100.0 * v));
+    let _ = writeln!(
+        o,
+        "\nAgainst the exact model, the largest gap at these f in units of M g: N_tot {}, \
+         F_tot {} (target 1 %); F {}, F_int {} (target 2 %; the rigid model cannot split \
+         F_tot, its split is the least pull in the laid tape). Spread of the simulation about \
+         a line over each window: N_tot {}, F_tot {}, F {}, F_int {} (target 1 %).",
+        pct(gap[0]),
+        pct(gap[1]),
+        pct(gap[2]),
+        pct(gap[3]),
+        pct(spread[0]),
+        pct(spread[1]),
+        pct(spread[2]),
+        pct(spread[3]),
+    );
+    if let Some(f) = report.geo_hop_fraction {
+        let _ = writeln!(
+            o,
+            "The exact model needs a floor that pulls (N_tot < 0) from f = {f:.4} on: there it \
+             stops applying."
+        );
+    }
+    if let Some(s) = samples
+        .iter()
+        .find(|s| s.f_int_geo_n.is_finite() && s.f_int_geo_n != 0.0)
+    {
+        let _ = writeln!(
+            o,
+            "From f = {:.4} on, |F_tot| exceeds the floor's grip mu N_tot: the exact model's laid \
+             tape must pull.",
+            s.laid_fraction
         );
     }
     let last = report
@@ -114,12 +215,63 @@ pub fn force_table(report: &RunReport, samples: &[Sample]) -> String {
         .filter_map(|m| m.t_sim_s.map(|_| m.laid_fraction))
         .fold(0.0, f64::max)
         .min(0.95);
+    if let Some(forces) = &forces {
+        let _ = writeln!(
+            o,
+            "F_tot changes sign at f = {} in the simulation and at f = {} in the paper's form.",
+            show(sim_sign_change(samples, last)),
+            show(sign_change_fraction(forces, last)),
+        );
+    }
+    if matches!(Case::of(scene), Case::Coil) {
+        o.push_str(&eq11_against_eq30(report, samples));
+    }
+    o
+}
+
+/// Eq. (11) against eq. (30) on a level floor: their approximate forms for `r >> b`,
+/// eq. (11)'s `M g b (5 r^3 - 2 R^3) / (3 pi r^2 R^2)` with ERRATA A7's push term and
+/// eq. (30)'s printed `M g b (7 r^3 - 10 R^3) / (3 pi r^2 R^2)`, beside the simulation.
+/// ERRATA A6: line 1 of (30) is (11) exactly; the printed line 2 slips a sign.
+fn eq11_against_eq30(report: &RunReport, samples: &[Sample]) -> String {
+    let scene = &report.scene;
+    let (big_r, b, m, g) = (
+        scene.tape.outer_radius_m,
+        scene.tape.thickness_m,
+        scene.tape.mass_kg,
+        scene.g_m_s2,
+    );
+    let rdot0 = b * scene.push_speed_m_s / (2.0 * PI * big_r);
+    let mut o = String::new();
     let _ = writeln!(
         o,
-        "\nSimulated forces are averaged over laid fractions f +- {FORCE_WINDOW}. F_tot changes sign \
-         at f = {} in the simulation and at f = {} in the reference.",
-        show(sim_sign_change(samples, last)),
-        show(sign_change_fraction(&forces, last)),
+        "\nEq. (11) against eq. (30), approximate forms (N): the simulation says which is right.\n"
+    );
+    let _ = writeln!(
+        o,
+        "| f | F_tot sim | eq. (11) with A7 | eq. (30) as printed |"
+    );
+    let _ = writeln!(o, "|---|---|---|---|");
+    let (mut worst11, mut worst30) = (0.0_f64, 0.0_f64);
+    for f in FORCE_FRACTIONS {
+        let Some(sim) = window_mean(samples, f, FORCE_WINDOW, |s| s.f_tot_n) else {
+            continue;
+        };
+        let r = big_r * (1.0 - f).sqrt();
+        let k = m * g * b / (3.0 * PI * r * r * big_r * big_r);
+        let eq11 = k * (5.0 * r.powi(3) - 2.0 * big_r.powi(3))
+            - 2.0 * PI * m * big_r * big_r * rdot0 * rdot0 / (b * r * r);
+        let eq30 = k * (7.0 * r.powi(3) - 10.0 * big_r.powi(3));
+        worst11 = worst11.max((sim - eq11).abs() / (m * g));
+        worst30 = worst30.max((sim - eq30).abs() / (m * g));
+        let _ = writeln!(o, "| {f} | {sim:.4} | {eq11:.4} | {eq30:.4} |");
+    }
+    let _ = writeln!(
+        o,
+        "\nLargest gap in units of M g: eq. (11) {:.2} %, eq. (30) as printed {:.2} %. ERRATA \
+         A6: line 1 of (30) is (11); its line 2 slips a sign.",
+        100.0 * worst11,
+        100.0 * worst30
     );
     o
 }

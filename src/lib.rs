@@ -11,6 +11,7 @@
 pub mod analysis;
 pub mod check;
 pub mod compare;
+pub mod force_window;
 pub mod forces;
 pub mod frame;
 pub mod guard;

@@ -769,8 +769,9 @@ mod tests {
             .filter(|c| !required.contains(c))
             .count();
         assert_eq!(
-            refs, 18,
-            "optional: r_ref..friction_ref, the exact model, r_ft, the valid reference, theta, forces"
+            refs, 26,
+            "optional: r_ref..friction_ref, the exact model, r_ft, the valid reference, theta, \
+             the forces on the moving part (none after the release) and the exact model's"
         );
     }
 

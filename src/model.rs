@@ -142,6 +142,55 @@ pub struct Observation {
     pub dt_s: f64,
     /// Linear momentum of everything that moves, `sum m v` (kg m/s).
     pub momentum_kg_m_s: [f64; 2],
+    /// What acted on the tape during the last step, as impulses (N s).
+    pub impulses: StepImpulses,
+}
+
+/// The impulses on the tape during one step (N s, up and +x positive), read from the
+/// engine: summed over the steps of a sample interval and divided by it, they are the
+/// interval's mean forces.
+///
+/// The moving part is the coil with the link hanging from it (the link that left the coil
+/// last, not yet laid). Its external forces are gravity, the floor's contact on the coil,
+/// and the laid tape pulling through the hanging link's near node:
+/// ```text
+/// total = P(t + dt) - P(t) - m g dt        over the moving part's own bodies (N_tot, F_tot)
+/// floor = the floor's contact impulses on the coil                             (N, F)
+/// laid  = total - floor: the laid tape's pull through its end                  (N_int, F_int)
+/// ```
+/// The set is fixed within the step; a link shed after it carries its momentum out with it.
+/// All zero once the coil is released.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct StepImpulses {
+    /// Impulse of every force but gravity on the moving part (N s).
+    pub total: [f64; 2],
+    /// Impulse of the floor's contacts on the coil (N s).
+    pub floor_on_coil: [f64; 2],
+    /// Impulse of the floor's contacts on everything that moves: the coil and the laid
+    /// links not yet frozen (N s).
+    pub floor_on_moving: [f64; 2],
+}
+
+impl StepImpulses {
+    /// Impulse of the laid tape on the moving part, `total - floor_on_coil` (N s).
+    pub fn laid(&self) -> [f64; 2] {
+        [
+            self.total[0] - self.floor_on_coil[0],
+            self.total[1] - self.floor_on_coil[1],
+        ]
+    }
+
+    /// Adds another step's impulses.
+    pub fn add(&mut self, other: &Self) {
+        for (a, b) in [
+            (&mut self.total, other.total),
+            (&mut self.floor_on_coil, other.floor_on_coil),
+            (&mut self.floor_on_moving, other.floor_on_moving),
+        ] {
+            a[0] += b[0];
+            a[1] += b[1];
+        }
+    }
 }
 
 /// Diagnostics of the world after a step, read by the run's guards ([`Model::health`]).
@@ -329,6 +378,8 @@ pub struct Model {
     shedding: bool,
     /// Kinetic plus potential energy at the last observation, the next step's start (J).
     energy_j: f64,
+    /// The last step's impulses on the moving part.
+    impulses: StepImpulses,
 }
 
 impl Model {
@@ -555,6 +606,7 @@ impl Model {
             chord_ratio: first.chord_ratio,
             shedding: true,
             energy_j: 0.0,
+            impulses: StepImpulses::default(),
         };
         model.restick();
         model.energy_j = model.total_energy();
@@ -654,9 +706,12 @@ impl Model {
         } else {
             Vec::new()
         };
+        let moving = self.moving_part();
+        let momentum_before = self.momentum_of(&moving);
         self.world.step();
         self.t += dt;
         self.last_dt = dt;
+        self.impulses = self.step_impulses(&moving, momentum_before, dt);
         let (kinetic, potential) = self.energy();
         let after = kinetic + potential;
         match self.phase {
@@ -1221,6 +1276,52 @@ impl Model {
         }
     }
 
+    /// The bodies of the moving part while the coil rolls: the coil, and the link hanging
+    /// from it if it has not been laid (it has no floor contact yet). Empty after the release.
+    fn moving_part(&self) -> Vec<RigidBodyHandle> {
+        let Some(coil) = self.coil else {
+            return Vec::new();
+        };
+        let hanging = self
+            .free
+            .back()
+            .filter(|p| self.world.bodies[p.body].colliders().is_empty())
+            .map(|p| p.body);
+        std::iter::once(coil).chain(hanging).collect()
+    }
+
+    /// Linear momentum of some bodies (kg m/s).
+    fn momentum_of(&self, bodies: &[RigidBodyHandle]) -> [f64; 2] {
+        bodies.iter().fold([0.0, 0.0], |p, &h| {
+            let body = &self.world.bodies[h];
+            let v = body.linvel() * body.mass();
+            [p[0] + v.x, p[1] + v.y]
+        })
+    }
+
+    /// The impulses of the step just taken on the moving part `moving` (see
+    /// [`StepImpulses`]), whose momentum was `before` at its start.
+    fn step_impulses(&self, moving: &[RigidBodyHandle], before: [f64; 2], dt: f64) -> StepImpulses {
+        let mut out = StepImpulses::default();
+        for c in work::floor_impulses(&self.world.narrow_phase, &self.world.colliders, self.floor) {
+            let f = c.normal + c.friction;
+            out.floor_on_moving[0] += f.x;
+            out.floor_on_moving[1] += f.y;
+            if Some(c.body) == self.coil {
+                out.floor_on_coil[0] += f.x;
+                out.floor_on_coil[1] += f.y;
+            }
+        }
+        if moving.is_empty() {
+            return out;
+        }
+        let after = self.momentum_of(moving);
+        let mass: f64 = moving.iter().map(|&h| self.world.bodies[h].mass()).sum();
+        let g = self.world.gravity * (mass * dt);
+        out.total = [after[0] - before[0] - g.x, after[1] - before[1] - g.y];
+        out
+    }
+
     /// Linear momentum of the dynamic bodies (kg m/s).
     fn momentum(&self) -> [f64; 2] {
         let mut p = [0.0, 0.0];
@@ -1302,6 +1403,7 @@ impl Model {
             max_penetration_m: self.max_penetration(),
             dt_s: self.last_dt,
             momentum_kg_m_s: self.momentum(),
+            impulses: self.impulses,
         }
     }
 
@@ -1486,6 +1588,31 @@ mod tests {
             "energy drifted by {:.3} % over 1 s",
             100.0 * worst
         );
+    }
+
+    #[test]
+    fn impulses_on_the_moving_part_have_the_papers_signs_and_close_the_momentum_balance() {
+        // Early in the unroll: the floor holds the coil up (N > 0, about M g) and the total
+        // horizontal force points along +x, where the coil goes (eq. 11 before its sign
+        // change); the laid tape's share is what the momentum balance leaves of the floor's.
+        let mut model = Model::new(&yoga());
+        let (mut sum, mut time) = (StepImpulses::default(), 0.0);
+        for _ in 0..300 {
+            let o = model.step();
+            sum.add(&o.impulses);
+            time += o.dt_s;
+        }
+        let weight = 1.5 * 9.81;
+        let n = sum.floor_on_coil[1] / time;
+        assert!((n / weight - 1.0).abs() < 0.15, "N = {n} N");
+        assert!(sum.total[0] > 0.0, "F_tot = {} N", sum.total[0] / time);
+        let laid = sum.laid();
+        assert!(
+            (laid[0] + sum.floor_on_coil[0] - sum.total[0]).abs() < 1e-15,
+            "F + F_int != F_tot"
+        );
+        // The floor's force on everything that moves includes the coil's.
+        assert!(sum.floor_on_moving[1] >= sum.floor_on_coil[1]);
     }
 
     #[test]

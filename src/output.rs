@@ -18,7 +18,7 @@ use crate::run::{Observer, RunReport, Sample};
 use crate::scene::Scene;
 
 /// Column names of `samples.csv`, in order.
-pub const CSV_COLUMNS: [&str; 41] = [
+pub const CSV_COLUMNS: [&str; 49] = [
     "t_s",
     "laid_fraction",
     "r_m",
@@ -55,6 +55,14 @@ pub const CSV_COLUMNS: [&str; 41] = [
     "theta_ref_rad",
     "n_tot_n",
     "f_tot_n",
+    "n_floor_n",
+    "f_floor_n",
+    "n_int_n",
+    "f_int_n",
+    "n_tot_geo_n",
+    "f_tot_geo_n",
+    "f_floor_geo_n",
+    "f_int_geo_n",
     "n_tot_ref_n",
     "f_tot_ref_n",
     "active_bodies",
@@ -62,7 +70,7 @@ pub const CSV_COLUMNS: [&str; 41] = [
     "max_penetration_m",
 ];
 
-fn sample_values(s: &Sample) -> [f64; 41] {
+fn sample_values(s: &Sample) -> [f64; 49] {
     #[allow(clippy::cast_precision_loss)]
     let bodies = s.active_bodies as f64;
     [
@@ -102,6 +110,14 @@ fn sample_values(s: &Sample) -> [f64; 41] {
         s.theta_ref_rad,
         s.n_tot_n,
         s.f_tot_n,
+        s.n_floor_n,
+        s.f_floor_n,
+        s.n_int_n,
+        s.f_int_n,
+        s.n_tot_geo_n,
+        s.f_tot_geo_n,
+        s.f_floor_geo_n,
+        s.f_int_geo_n,
         s.n_tot_ref_n,
         s.f_tot_ref_n,
         bodies,

@@ -356,6 +356,19 @@ pub struct ExactGeometry {
     traj: Trajectory,
 }
 
+/// The exact-geometry model's constraint forces at one instant (N, up and +x positive).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct GeoForces {
+    /// Everything but gravity on the spiral, upward: `N_tot`.
+    pub n_tot_n: f64,
+    /// Everything but gravity on the spiral, along +x: `F_tot = F + F_int`.
+    pub f_tot_n: f64,
+    /// The floor's friction on the spiral, `F`.
+    pub f_floor_n: f64,
+    /// The laid tape's pull on the spiral through its end, `F_int`.
+    pub f_int_n: f64,
+}
+
 /// Geometry of the coil with its lowest point at a given spiral parameter.
 #[derive(Debug, Clone, Copy)]
 struct Pose {
@@ -594,22 +607,98 @@ impl ExactGeometry {
         self.traj.q_at(t)
     }
 
-    /// The floor's normal force on the coil (N) that keeps it rolling with the lowest point
-    /// at `psi`: `N = m g + d(m y_cm')/dt` (the shed tape leaves at rest and carries no
-    /// momentum). The spiral's centre of mass sits about `b / pi` off its axis, but that
-    /// offset is tied to the outer end, which is always at the peel point: it does not
-    /// swing round with the spin. `N` falls below zero only near the end, when the coil's
-    /// centre accelerates downward faster than `g`; from there a rigid spiral on a floor
-    /// that cannot pull would hop, and this model no longer applies.
-    pub fn normal_force_n(&self, psi: f64) -> f64 {
+    /// Momentum of the rolling spiral with its lowest point at `psi` (kg m/s): every point
+    /// of it turns about the peel point, so with `c` its centre of mass from there and
+    /// `omega` its clockwise spin, `P = m omega (c_y, -c_x)`. `None` when sliding.
+    pub fn momentum(&self, psi: f64) -> Option<[f64; 2]> {
+        if self.sliding {
+            return None;
+        }
+        let pose = self.pose(psi);
+        let w = Spiral::turn_rate(psi) * self.psidot(psi);
+        let c = [
+            pose.x_cm - pose.laid_m,
+            pose.y_cm - 0.5 * self.p.thickness_m,
+        ];
+        Some([pose.mass_kg * w * c[1], -pose.mass_kg * w * c[0]])
+    }
+
+    /// `(F_tot, N_tot)` of the rolling spiral from the rate of change of its momentum: every
+    /// point of it turns about the peel point, so with `c` its centre of mass from there and
+    /// `omega` its clockwise spin, `P = m omega (c_y, -c_x)`; by central differences in `psi`
+    /// (N). Sliding, `F_tot` is `NaN` and `N_tot` holds: the material at the contact slides
+    /// along the floor, which adds nothing to the vertical momentum `-m omega c_x`.
+    fn force_from_momentum(&self, psi: f64) -> [f64; 2] {
         let h = 1e-4;
-        // P(psi) = m y_cm' = m (dy_cm/dpsi) psi', with psi' = -|psi'|.
         let momentum = |q: f64| {
-            let dy = (self.pose(q + h).y_cm - self.pose(q - h).y_cm) / (2.0 * h);
-            -self.pose(q).mass_kg * dy * self.psidot(q)
+            let pose = self.pose(q);
+            let w = Spiral::turn_rate(q) * self.psidot(q);
+            let c = [
+                pose.x_cm - pose.laid_m,
+                pose.y_cm - 0.5 * self.p.thickness_m,
+            ];
+            let x = if self.sliding {
+                f64::NAN
+            } else {
+                pose.mass_kg * w * c[1]
+            };
+            [x, -pose.mass_kg * w * c[0]]
         };
-        let dp_dpsi = (momentum(psi + h) - momentum(psi - h)) / (2.0 * h);
-        self.pose(psi).mass_kg * self.g_perp - self.psidot(psi) * dp_dpsi
+        let p1 = momentum(psi + h);
+        let p0 = momentum(psi - h);
+        // psi falls as the spiral rolls: psi' = -|psi'|.
+        let rate = -self.psidot(psi) / (2.0 * h);
+        let m = self.pose(psi).mass_kg;
+        [
+            (p1[0] - p0[0]) * rate - m * self.g_along,
+            (p1[1] - p0[1]) * rate + m * self.g_perp,
+        ]
+    }
+
+    /// The floor's normal force on the rolling spiral with its lowest point at `psi`, `N_tot`
+    /// of [`Self::forces`] (N). The spiral's centre of mass sits about `b / pi` off its
+    /// axis, tied to the outer end, which is always at the peel point: that offset is why
+    /// the momentum is not `m` times the rate of change of the wound mass's centre (the
+    /// shed tape takes its share of the first moment with it). `N` falls below zero only
+    /// near the end, when the coil's centre accelerates downward faster than `g`; from
+    /// there a rigid spiral on a floor that cannot pull would hop, and this model no longer
+    /// applies. Sliding on a frictionless floor, the same.
+    pub fn normal_force_n(&self, psi: f64) -> f64 {
+        self.force_from_momentum(psi)[1]
+    }
+
+    /// The constraint forces on the rolling spiral with its lowest point at `psi` (N), from
+    /// its momentum (see [`Self::normal_force_n`]): the tape it sheds leaves at the peel point, where the velocity is zero,
+    /// and carries no momentum away, so `dP/dt` is the force of everything but gravity.
+    ///
+    /// ```text
+    /// N_tot = dP_y/dt + m g cos(a),   F_tot = dP_x/dt - m g sin(a),   d/dt = psi' d/dpsi
+    /// ```
+    /// The floor and the laid tape act at the same point, the peel point, so the rigid model
+    /// gives their sum only. The laid tape is flexible and leaves the floor level there: it
+    /// pulls along the floor (`N_int = 0`, `N = N_tot`). Of `F_tot` the split given is the
+    /// one with the least pull in the laid tape: the floor's friction carries it while it
+    /// can, `|F| <= mu N`, and the laid tape the rest. The simulation's split depends on how
+    /// its laid tape is held (see the README). `None` when sliding or at the table's ends.
+    pub fn forces(&self, psi: f64, friction: f64) -> Option<GeoForces> {
+        let (lo, hi) = (self.traj.q_end(), self.spiral.psi_out);
+        if self.sliding || psi - 1e-4 <= lo || psi + 1e-4 >= hi {
+            return None;
+        }
+        let [f_tot, n_tot] = self.force_from_momentum(psi);
+        // A sticky floor (infinite friction) holds whatever it must.
+        let grip = if friction.is_infinite() {
+            f64::INFINITY
+        } else {
+            friction * n_tot.max(0.0)
+        };
+        let floor = f_tot.clamp(-grip, grip);
+        Some(GeoForces {
+            n_tot_n: n_tot,
+            f_tot_n: f_tot,
+            f_floor_n: floor,
+            f_int_n: f_tot - floor,
+        })
     }
 
     /// The first laid fraction at which the rolling spiral would need a floor that pulls

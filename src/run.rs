@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::force_window::{ForceWindow, WindowMean};
 use crate::forces::{ForceFn, force_reference};
 use crate::frame::{Event, Frame, GhostDisc, GhostSpiral};
 use crate::guard::{Applicability, Bounds, Guard, ReferenceLimit, Status};
@@ -36,9 +37,10 @@ pub struct Sample {
     pub potential_j: f64,
     /// Energy dissipated so far, `E0 - kinetic - potential` (J).
     pub dissipated_j: f64,
-    /// Floor normal force on the moving tape (N).
+    /// Floor normal force on everything that moves (the coil and the laid links not yet
+    /// frozen), its contact impulses summed over the sample interval over the interval (N).
     pub normal_n: f64,
-    /// Floor horizontal force on the moving tape, +x positive (N).
+    /// Floor horizontal force on everything that moves, +x positive, likewise (N).
     pub friction_n: f64,
     /// Loss inside engine steps while rolling (J).
     pub lost_step_j: f64,
@@ -88,11 +90,31 @@ pub struct Sample {
     pub theta_rad: f64,
     /// Spools: the valid reference's `theta` at this time (rad).
     pub theta_ref_rad: f64,
-    /// Total upward force on the coil from the momentum balance of the moving tape over
-    /// the last sample interval, `dP_y/dt + m g cos(a)` (N).
+    /// Total upward force on the moving part (the coil and the link hanging from it), from
+    /// its momentum balance summed over the sample interval, `dP_y/dt + m g cos(a)` (N);
+    /// `NaN` once the coil is released.
     pub n_tot_n: f64,
-    /// Total horizontal force on the coil, `dP_x/dt - m g sin(a)`, +x positive (N).
+    /// Total horizontal force on the moving part, `dP_x/dt - m g sin(a)`, +x positive (N).
     pub f_tot_n: f64,
+    /// The floor's upward force on the coil, its contact impulses over the interval (N).
+    pub n_floor_n: f64,
+    /// The floor's horizontal force on the coil, `F` of sec. 2.2, +x positive (N).
+    pub f_floor_n: f64,
+    /// The laid tape's upward force on the moving part, through its end: `n_tot - n_floor`
+    /// (N).
+    pub n_int_n: f64,
+    /// The laid tape's horizontal force on the moving part, `F_int` of sec. 2.2:
+    /// `f_tot - f_floor` (N).
+    pub f_int_n: f64,
+    /// Exact-geometry model at the simulation's laid fraction: `N_tot` from the momentum of
+    /// the rolling spiral (N).
+    pub n_tot_geo_n: f64,
+    /// Exact-geometry model: `F_tot` from the momentum of the rolling spiral (N).
+    pub f_tot_geo_n: f64,
+    /// Exact-geometry model: the floor's horizontal force on the spiral, `F` (N).
+    pub f_floor_geo_n: f64,
+    /// Exact-geometry model: the laid tape's horizontal force on the spiral, `F_int` (N).
+    pub f_int_geo_n: f64,
     /// The case's analytic `N_tot` at the simulation's laid fraction (see `forces`) (N).
     pub n_tot_ref_n: f64,
     /// The case's analytic `F_tot` at the simulation's laid fraction (N).
@@ -338,8 +360,9 @@ pub struct References {
     pub forces: Option<ForceFn>,
     /// Spools: `l / r`, the angle of the whole tape (rad).
     pub theta_per_fraction: Option<f64>,
-    /// `(g sin a, g cos a)` (m/s^2).
-    pub gravity_along_across: (f64, f64),
+    /// The floor's friction coefficient for the exact-geometry model's force split
+    /// (infinite on a sticky floor); `None` on a fixed axis, which has no floor.
+    pub floor_grip: Option<f64>,
 }
 
 impl References {
@@ -357,9 +380,10 @@ impl References {
                 let sg = SpoolGeometry::of(scene);
                 sg.l_m / sg.r_m
             }),
-            gravity_along_across: {
-                let (s, c) = scene.slope_deg.to_radians().sin_cos();
-                (scene.g_m_s2 * s, scene.g_m_s2 * c)
+            floor_grip: match (scene.fixed_axis, scene.sticky) {
+                (true, _) => None,
+                (false, true) => Some(f64::INFINITY),
+                (false, false) => Some(scene.friction),
             },
         }
     }
@@ -469,8 +493,8 @@ pub fn run_until(
     let mut wall_rolling = None;
     let mut max_gap: f64 = 0.0;
     let mut max_pen: f64 = 0.0;
-    // Momentum and time at the last sample, for the force balance over the interval.
-    let mut at_last_sample = (initial.momentum_kg_m_s, 0.0);
+    // The impulses on the tape, for each sample's mean forces.
+    let mut window = ForceWindow::default();
     let frame_interval = if scene.scene_rate_hz > 0.0 && observers.iter().any(|o| o.wants_frames())
     {
         1.0 / scene.scene_rate_hz
@@ -501,6 +525,14 @@ pub fn run_until(
         let obs = model.step();
         wall += start.elapsed().as_secs_f64();
         steps += 1;
+        let detached = prev.map_or(0, |p| p.detached) < obs.detached;
+        window.push(
+            obs.t_s,
+            obs.dt_s,
+            &obs.impulses,
+            obs.laid_fraction,
+            detached,
+        );
         let health = model.health();
         let tripped = guard.check(&obs, &health);
         if let Some(reason) = tripped.as_ref()
@@ -604,16 +636,9 @@ pub fn run_until(
         prev_logged = obs.t_s >= next_sample || last_step || released;
         if prev_logged {
             let mut sample = make_sample(&obs, xdot, e0, &refs);
-            let (p0, t0) = at_last_sample;
-            let span = obs.t_s - t0;
-            if span > 0.0 {
-                let coil_mass = scene.tape.mass_kg * (1.0 - obs.laid_fraction).max(0.0);
-                let (g_along, g_across) = refs.gravity_along_across;
-                let p = obs.momentum_kg_m_s;
-                sample.n_tot_n = (p[1] - p0[1]) / span + coil_mass * g_across;
-                sample.f_tot_n = (p[0] - p0[0]) / span - coil_mass * g_along;
+            if let Some(mean) = window.sample(obs.phase == Phase::Rolling) {
+                set_forces(&mut sample, &mean, obs.phase == Phase::Rolling, &refs);
             }
-            at_last_sample = (obs.momentum_kg_m_s, obs.t_s);
             for o in observers.iter_mut() {
                 o.observe_sample(&sample)?;
             }
@@ -789,6 +814,36 @@ fn make_frame(
     }
 }
 
+/// A sample's forces: the mean over its window (see [`ForceWindow`]) of the floor's on
+/// everything that moves always; while the coil rolls, those on the moving part, with the
+/// references at the window's mean laid fraction.
+fn set_forces(sample: &mut Sample, mean: &WindowMean, rolling: bool, refs: &References) {
+    let f = &mean.forces;
+    sample.normal_n = f.floor_on_moving[1];
+    sample.friction_n = f.floor_on_moving[0];
+    if !rolling {
+        return;
+    }
+    let laid = f.laid();
+    sample.n_tot_n = f.total[1];
+    sample.f_tot_n = f.total[0];
+    sample.n_floor_n = f.floor_on_coil[1];
+    sample.f_floor_n = f.floor_on_coil[0];
+    sample.n_int_n = laid[1];
+    sample.f_int_n = laid[0];
+    let nan = f64::NAN;
+    let paper = refs.forces.as_ref().and_then(|r| r(mean.laid_fraction));
+    sample.n_tot_ref_n = paper.map_or(nan, |p| p.0);
+    sample.f_tot_ref_n = paper.map_or(nan, |p| p.1);
+    let psi = refs.exact.psi_at_fraction(mean.laid_fraction);
+    if let Some(geo) = refs.floor_grip.and_then(|mu| refs.exact.forces(psi, mu)) {
+        sample.n_tot_geo_n = geo.n_tot_n;
+        sample.f_tot_geo_n = geo.f_tot_n;
+        sample.f_floor_geo_n = geo.f_floor_n;
+        sample.f_int_geo_n = geo.f_int_n;
+    }
+}
+
 fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &References) -> Sample {
     let nan = f64::NAN;
     let c = refs.continuum.state_at_time(obs.t_s);
@@ -839,6 +894,14 @@ fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &References) -> Samp
         theta_ref_rad: refs.theta_per_fraction.map_or(nan, |k| k * f_ref),
         n_tot_n: nan,
         f_tot_n: nan,
+        n_floor_n: nan,
+        f_floor_n: nan,
+        n_int_n: nan,
+        f_int_n: nan,
+        n_tot_geo_n: nan,
+        f_tot_geo_n: nan,
+        f_floor_geo_n: nan,
+        f_int_geo_n: nan,
         n_tot_ref_n: forces.map_or(nan, |f| f.0),
         f_tot_ref_n: forces.map_or(nan, |f| f.1),
         active_bodies: obs.active_bodies,
