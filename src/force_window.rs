@@ -96,22 +96,7 @@ impl ForceWindow {
         if span <= 0.0 {
             return None;
         }
-        let mut forces = StepImpulses::default();
-        for (out, now, then) in [
-            (&mut forces.total, self.sum.total, sum0.total),
-            (
-                &mut forces.floor_on_coil,
-                self.sum.floor_on_coil,
-                sum0.floor_on_coil,
-            ),
-            (
-                &mut forces.floor_on_moving,
-                self.sum.floor_on_moving,
-                sum0.floor_on_moving,
-            ),
-        ] {
-            *out = [(now[0] - then[0]) / span, (now[1] - then[1]) / span];
-        }
+        let forces = self.sum.combine(&sum0, 1.0 / span, -1.0 / span);
         Some(WindowMean {
             forces,
             laid_fraction: (self.fraction_time - ft0) / span,
@@ -135,6 +120,7 @@ mod tests {
             total: [x, y],
             floor_on_coil: [0.5 * x, 0.5 * y],
             floor_on_moving: [x, y],
+            ..StepImpulses::default()
         }
     }
 

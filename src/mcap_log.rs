@@ -769,9 +769,9 @@ mod tests {
             .filter(|c| !required.contains(c))
             .count();
         assert_eq!(
-            refs, 26,
+            refs, 32,
             "optional: r_ref..friction_ref, the exact model, r_ft, the valid reference, theta, \
-             the forces on the moving part (none after the release) and the exact model's"
+             the forces and torques on the moving part (none after the release) and the exact model's"
         );
     }
 

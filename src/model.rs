@@ -142,6 +142,9 @@ pub struct Observation {
     pub dt_s: f64,
     /// Linear momentum of everything that moves, `sum m v` (kg m/s).
     pub momentum_kg_m_s: [f64; 2],
+    /// Angular momentum of the moving part (the coil and the link hanging from it) about
+    /// the origin `(0, b/2)`, counter-clockwise (kg m^2/s); 0 once the coil is released.
+    pub angular_momentum_o: f64,
     /// What acted on the tape during the last step, as impulses (N s).
     pub impulses: StepImpulses,
 }
@@ -169,6 +172,29 @@ pub struct StepImpulses {
     /// Impulse of the floor's contacts on everything that moves: the coil and the laid
     /// links not yet frozen (N s).
     pub floor_on_moving: [f64; 2],
+    /// Angular impulses on the moving part about the paper's origin, the laid tape's outer
+    /// end on the floor (here on the contact plane, `(0, b/2)`).
+    pub about_origin: AngularImpulses,
+}
+
+/// Angular impulses about the origin over a step, counter-clockwise positive (N m s).
+/// `change - gravity - floor - laid` is the torque identity's gap, a measurement error.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct AngularImpulses {
+    /// Change of the moving part's angular momentum `L_O` over the step.
+    pub change: f64,
+    /// Gravity, at each body's centre of mass (mid-step).
+    pub gravity: f64,
+    /// The floor's contacts on the coil, at their points.
+    pub floor: f64,
+    /// The laid tape's pull, at the node it pulls through.
+    pub laid: f64,
+    /// Gravity as eq. (16) places it: across the floor at the contact line, not at the
+    /// spiral's off-centre centre of mass.
+    pub gravity_at_contact_line: f64,
+    /// Everything but gravity as eq. (16) places it: the momentum balance's vertical
+    /// impulse at the contact line, its horizontal one in the floor's plane.
+    pub others_at_contact_line: f64,
 }
 
 impl StepImpulses {
@@ -182,15 +208,41 @@ impl StepImpulses {
 
     /// Adds another step's impulses.
     pub fn add(&mut self, other: &Self) {
-        for (a, b) in [
-            (&mut self.total, other.total),
-            (&mut self.floor_on_coil, other.floor_on_coil),
-            (&mut self.floor_on_moving, other.floor_on_moving),
-        ] {
-            a[0] += b[0];
-            a[1] += b[1];
+        *self = self.combine(other, 1.0, 1.0);
+    }
+
+    /// `a self + b other`, field by field.
+    pub fn combine(&self, other: &Self, a: f64, b: f64) -> Self {
+        let v = |x: [f64; 2], y: [f64; 2]| [a * x[0] + b * y[0], a * x[1] + b * y[1]];
+        let (p, q) = (&self.about_origin, &other.about_origin);
+        let s = |x: f64, y: f64| a * x + b * y;
+        Self {
+            total: v(self.total, other.total),
+            floor_on_coil: v(self.floor_on_coil, other.floor_on_coil),
+            floor_on_moving: v(self.floor_on_moving, other.floor_on_moving),
+            about_origin: AngularImpulses {
+                change: s(p.change, q.change),
+                gravity: s(p.gravity, q.gravity),
+                floor: s(p.floor, q.floor),
+                laid: s(p.laid, q.laid),
+                gravity_at_contact_line: s(p.gravity_at_contact_line, q.gravity_at_contact_line),
+                others_at_contact_line: s(p.others_at_contact_line, q.others_at_contact_line),
+            },
         }
     }
+}
+
+/// The moving part at the start of a step, for its balances over the step.
+struct MovingSnapshot {
+    bodies: Vec<RigidBodyHandle>,
+    momentum: [f64; 2],
+    angular_momentum: f64,
+    /// Each body's centre of mass (world, m).
+    centres: Vec<Vector>,
+    /// Where the laid tape pulls on it (world, m).
+    pull_at: Option<Vector>,
+    /// The contact line's x (m).
+    contact_x: f64,
 }
 
 /// Diagnostics of the world after a step, read by the run's guards ([`Model::health`]).
@@ -706,12 +758,11 @@ impl Model {
         } else {
             Vec::new()
         };
-        let moving = self.moving_part();
-        let momentum_before = self.momentum_of(&moving);
+        let moving = self.snapshot();
         self.world.step();
         self.t += dt;
         self.last_dt = dt;
-        self.impulses = self.step_impulses(&moving, momentum_before, dt);
+        self.impulses = self.step_impulses(&moving, dt);
         let (kinetic, potential) = self.energy();
         let after = kinetic + potential;
         match self.phase {
@@ -1299,26 +1350,112 @@ impl Model {
         })
     }
 
-    /// The impulses of the step just taken on the moving part `moving` (see
-    /// [`StepImpulses`]), whose momentum was `before` at its start.
-    fn step_impulses(&self, moving: &[RigidBodyHandle], before: [f64; 2], dt: f64) -> StepImpulses {
+    /// The paper's origin: the laid tape's outer end, on the floor's contact plane.
+    fn origin(&self) -> Vector {
+        Vector::new(0.0, self.half_b)
+    }
+
+    /// Angular momentum of some bodies about the origin, counter-clockwise (kg m^2/s).
+    fn angular_momentum_of(&self, bodies: &[RigidBodyHandle]) -> f64 {
+        bodies
+            .iter()
+            .map(|&h| {
+                let body = &self.world.bodies[h];
+                let r = body.center_of_mass() - self.origin();
+                let own = body.mass_properties().effective_angular_inertia();
+                r.perp_dot(body.linvel() * body.mass()) + own * body.angvel()
+            })
+            .sum()
+    }
+
+    /// The angular momentum about the origin of the moving part (see [`StepImpulses`]),
+    /// counter-clockwise (kg m^2/s); 0 once the coil is released.
+    pub fn moving_angular_momentum(&self) -> f64 {
+        self.angular_momentum_of(&self.moving_part())
+    }
+
+    /// Where the laid tape pulls on the moving part: the hanging link's near node, or, if
+    /// the last link to leave has been laid, the coil's node it is joined at (world, m).
+    fn pull_point(&self) -> Option<Vector> {
+        self.coil?;
+        let p = self.free.back()?;
+        let body = &self.world.bodies[p.body];
+        let node = if body.colliders().is_empty() {
+            self.local[p.first][0]
+        } else {
+            self.local[p.last][1]
+        };
+        Some(body.position().transform_point(node))
+    }
+
+    fn snapshot(&self) -> MovingSnapshot {
+        let bodies = self.moving_part();
+        MovingSnapshot {
+            momentum: self.momentum_of(&bodies),
+            angular_momentum: self.angular_momentum_of(&bodies),
+            centres: bodies
+                .iter()
+                .map(|&h| self.world.bodies[h].center_of_mass())
+                .collect(),
+            pull_at: self.pull_point(),
+            contact_x: self.x_low,
+            bodies,
+        }
+    }
+
+    /// The impulses of the step just taken on the moving part, `before` at its start (see
+    /// [`StepImpulses`]).
+    fn step_impulses(&self, before: &MovingSnapshot, dt: f64) -> StepImpulses {
         let mut out = StepImpulses::default();
+        let o = self.origin();
+        let moving = &before.bodies;
+        let mut floor_angular = 0.0;
         for c in work::floor_impulses(&self.world.narrow_phase, &self.world.colliders, self.floor) {
             let f = c.normal + c.friction;
             out.floor_on_moving[0] += f.x;
             out.floor_on_moving[1] += f.y;
-            if Some(c.body) == self.coil {
+            if Some(c.body) == self.coil
+                && let Some(i) = moving.iter().position(|&h| h == c.body)
+            {
                 out.floor_on_coil[0] += f.x;
                 out.floor_on_coil[1] += f.y;
+                floor_angular += (before.centres[i] + c.arm - o).perp_dot(f);
             }
         }
         if moving.is_empty() {
             return out;
         }
         let after = self.momentum_of(moving);
-        let mass: f64 = moving.iter().map(|&h| self.world.bodies[h].mass()).sum();
+        let mut gravity_angular = 0.0;
+        let mut gravity_at_x = 0.0;
+        let mut mass = 0.0;
+        for (&h, &c0) in moving.iter().zip(&before.centres) {
+            let body = &self.world.bodies[h];
+            let w = self.world.gravity * (body.mass() * dt);
+            let mid = 0.5 * (c0 + body.center_of_mass());
+            gravity_angular += (mid - o).perp_dot(w);
+            gravity_at_x += Vector::new(before.contact_x - o.x, mid.y - o.y).perp_dot(w);
+            mass += body.mass();
+        }
         let g = self.world.gravity * (mass * dt);
-        out.total = [after[0] - before[0] - g.x, after[1] - before[1] - g.y];
+        out.total = [
+            after[0] - before.momentum[0] - g.x,
+            after[1] - before.momentum[1] - g.y,
+        ];
+        let laid = out.laid();
+        let pull_at = match (before.pull_at, self.pull_point()) {
+            (Some(a), Some(b)) => Some(0.5 * (a + b)),
+            (a, b) => a.or(b),
+        };
+        let laid_angular = pull_at.map_or(0.0, |p| (p - o).perp_dot(Vector::new(laid[0], laid[1])));
+        out.about_origin = AngularImpulses {
+            change: self.angular_momentum_of(moving) - before.angular_momentum,
+            gravity: gravity_angular,
+            floor: floor_angular,
+            laid: laid_angular,
+            gravity_at_contact_line: gravity_at_x,
+            others_at_contact_line: (before.contact_x - o.x) * out.total[1],
+        };
         out
     }
 
@@ -1403,6 +1540,7 @@ impl Model {
             max_penetration_m: self.max_penetration(),
             dt_s: self.last_dt,
             momentum_kg_m_s: self.momentum(),
+            angular_momentum_o: self.moving_angular_momentum(),
             impulses: self.impulses,
         }
     }

@@ -18,7 +18,7 @@ use crate::run::{Observer, RunReport, Sample};
 use crate::scene::Scene;
 
 /// Column names of `samples.csv`, in order.
-pub const CSV_COLUMNS: [&str; 49] = [
+pub const CSV_COLUMNS: [&str; 55] = [
     "t_s",
     "laid_fraction",
     "r_m",
@@ -63,6 +63,12 @@ pub const CSV_COLUMNS: [&str; 49] = [
     "f_tot_geo_n",
     "f_floor_geo_n",
     "f_int_geo_n",
+    "l_o",
+    "l_o_eq14",
+    "dl_o_dt_n_m",
+    "tau_o_n_m",
+    "tau_o_eq16_n_m",
+    "tau_offcentre_n_m",
     "n_tot_ref_n",
     "f_tot_ref_n",
     "active_bodies",
@@ -70,7 +76,7 @@ pub const CSV_COLUMNS: [&str; 49] = [
     "max_penetration_m",
 ];
 
-fn sample_values(s: &Sample) -> [f64; 49] {
+fn sample_values(s: &Sample) -> [f64; 55] {
     #[allow(clippy::cast_precision_loss)]
     let bodies = s.active_bodies as f64;
     [
@@ -118,6 +124,12 @@ fn sample_values(s: &Sample) -> [f64; 49] {
         s.f_tot_geo_n,
         s.f_floor_geo_n,
         s.f_int_geo_n,
+        s.l_o,
+        s.l_o_eq14,
+        s.dl_o_dt_n_m,
+        s.tau_o_n_m,
+        s.tau_o_eq16_n_m,
+        s.tau_offcentre_n_m,
         s.n_tot_ref_n,
         s.f_tot_ref_n,
         bodies,

@@ -148,8 +148,9 @@ const EQ7: RGBColor = RGBColor(214, 39, 40);
 /// `dir/energy.svg` (kinetic, potential and lost energy over the whole run, with MgR, E0
 /// and the drop at the bang; below, the bang alone, with what it dissipated split by
 /// mechanism) and `dir/approach.svg` (x' against r, log-log, over the unroll, with the
-/// references, eq. (7)'s x' ~ 1/r, and where the references stop applying). Returns the
-/// files written.
+/// references, eq. (7)'s x' ~ 1/r, and where the references stop applying) and
+/// `dir/forces.svg` (`N_tot`, and `F_tot` with its split into `F` and `F_int`, against the
+/// laid fraction up to 0.95, with the exact-geometry model's). Returns the files written.
 pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     let samples = SweepTable::read(&dir.join("samples.csv"))?;
     let report_path = dir.join("report.json");
@@ -303,7 +304,56 @@ pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
 
     let approach = dir.join("approach.svg");
     approach_plot(&approach, &samples, &report, upto, &name)?;
-    Ok(vec![motion, energy, approach])
+
+    let forces = dir.join("forces.svg");
+    {
+        let root = SVGBackend::new(&forces, (900, 800)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let panels = root.split_evenly((2, 1));
+        let f = cut("laid_fraction")?;
+        let curve = |label, column: &str, color, dashed| -> anyhow::Result<Curve<'_>> {
+            // Up to f = 0.95: the forces grow without bound as the coil runs out.
+            let mut points = pairs(&f, &cut(column)?);
+            points.retain(|p| p.0 <= 0.95);
+            Ok(Curve {
+                label,
+                points,
+                color,
+                dashed,
+            })
+        };
+        line_chart(
+            &panels[0],
+            &format!("{name}: upward force on the moving part, N_tot (link-period means)"),
+            "laid fraction f",
+            "N_tot (N)",
+            &[
+                curve("simulation", "n_tot_n", SIM, false)?,
+                curve("exact-geometry model", "n_tot_geo_n", EXACT, true)?,
+                curve("paper (eq. 9, A4)", "n_tot_ref_n", EQ7, true)?,
+            ],
+            SeriesLabelPosition::UpperRight,
+            |_| Ok(()),
+        )?;
+        line_chart(
+            &panels[1],
+            &format!("{name}: F_tot = F (floor) + F_int (laid tape), +x positive"),
+            "laid fraction f",
+            "force (N)",
+            &[
+                curve("F_tot simulation", "f_tot_n", SIM, false)?,
+                curve("F_tot exact", "f_tot_geo_n", SIM, true)?,
+                curve("F simulation", "f_floor_n", EXACT, false)?,
+                curve("F exact (least pull)", "f_floor_geo_n", EXACT, true)?,
+                curve("F_int simulation", "f_int_n", EQ7, false)?,
+                curve("F_int exact (least pull)", "f_int_geo_n", EQ7, true)?,
+            ],
+            SeriesLabelPosition::LowerLeft,
+            |_| Ok(()),
+        )?;
+        root.present().map_err(err)?;
+    }
+    Ok(vec![motion, energy, approach, forces])
 }
 
 /// The bang alone, from its release `bang_t` on, on a log time axis (its impacts take a

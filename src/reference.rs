@@ -205,6 +205,11 @@ impl Continuum {
     }
 
     /// R: the outer radius (m).
+    pub fn params(&self) -> Params {
+        self.p
+    }
+
+    /// R (m).
     pub fn outer_radius_m(&self) -> f64 {
         self.p.outer_radius_m
     }

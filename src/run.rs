@@ -2,6 +2,7 @@
 //! and feeds samples to observers; it builds the [`RunReport`]. It times only the model's
 //! step, and it never names a file format (outputs are [`Observer`]s).
 
+use std::f64::consts::PI;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -115,6 +116,23 @@ pub struct Sample {
     pub f_floor_geo_n: f64,
     /// Exact-geometry model: the laid tape's horizontal force on the spiral, `F_int` (N).
     pub f_int_geo_n: f64,
+    /// Angular momentum of the moving part about the origin (the laid tape's outer end, on
+    /// the contact plane), counter-clockwise (kg m^2/s).
+    pub l_o: f64,
+    /// Eq. (14) at the simulation's r and r' (from x' by constraint (1)): the coil as a disc
+    /// (kg m^2/s).
+    pub l_o_eq14: f64,
+    /// Rate of change of the moving part's `L_O` over the force window (N m).
+    pub dl_o_dt_n_m: f64,
+    /// Torque about the origin of every external force on the moving part, gravity, the
+    /// floor and the laid tape's pull, at the points where they act (N m).
+    pub tau_o_n_m: f64,
+    /// Eq. (16)'s placement of the same forces: gravity and the vertical forces at the
+    /// contact line, the horizontal ones in the floor's plane (N m).
+    pub tau_o_eq16_n_m: f64,
+    /// What eq. (16) misses of gravity's torque: the spiral's centre of mass is not over the
+    /// contact line (N m).
+    pub tau_offcentre_n_m: f64,
     /// The case's analytic `N_tot` at the simulation's laid fraction (see `forces`) (N).
     pub n_tot_ref_n: f64,
     /// The case's analytic `F_tot` at the simulation's laid fraction (N).
@@ -831,6 +849,11 @@ fn set_forces(sample: &mut Sample, mean: &WindowMean, rolling: bool, refs: &Refe
     sample.f_floor_n = f.floor_on_coil[0];
     sample.n_int_n = laid[1];
     sample.f_int_n = laid[0];
+    let a = &f.about_origin;
+    sample.dl_o_dt_n_m = a.change;
+    sample.tau_o_n_m = a.gravity + a.floor + a.laid;
+    sample.tau_o_eq16_n_m = a.gravity_at_contact_line + a.others_at_contact_line;
+    sample.tau_offcentre_n_m = a.gravity - a.gravity_at_contact_line;
     let nan = f64::NAN;
     let paper = refs.forces.as_ref().and_then(|r| r(mean.laid_fraction));
     sample.n_tot_ref_n = paper.map_or(nan, |p| p.0);
@@ -844,6 +867,17 @@ fn set_forces(sample: &mut Sample, mean: &WindowMean, rolling: bool, refs: &Refe
     }
 }
 
+/// Eq. (14), `L_O = M pi r^2 r' (R^2 + 2 r^2) / (b R^2)`, counter-clockwise, at the laid
+/// fraction `f` and contact-line speed `x'`, with `r' = -b x' / (2 pi r)` from constraint
+/// (1), `x = pi (R^2 - r^2) / b` (kg m^2/s).
+fn eq14_angular_momentum(refs: &References, f: f64, xdot: f64) -> f64 {
+    let p = refs.continuum.params();
+    let (big_r, b, m) = (p.outer_radius_m, p.thickness_m, p.mass_kg);
+    let r = big_r * (1.0 - f).max(0.0).sqrt();
+    let rdot = -b * xdot / (2.0 * PI * r);
+    m * PI * r * r * rdot * (big_r * big_r + 2.0 * r * r) / (b * big_r * big_r)
+}
+
 fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &References) -> Sample {
     let nan = f64::NAN;
     let c = refs.continuum.state_at_time(obs.t_s);
@@ -855,6 +889,11 @@ fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &References) -> Samp
         .and_then(|r| r.fraction_at_time(obs.t_s))
         .unwrap_or(nan);
     let forces = refs.forces.as_ref().and_then(|f| f(obs.laid_fraction));
+    let rolling = obs.phase == Phase::Rolling;
+    let l_o_eq14 = match (rolling, refs.theta_per_fraction) {
+        (true, None) => eq14_angular_momentum(refs, obs.laid_fraction, xdot),
+        _ => nan,
+    };
     Sample {
         t_s: obs.t_s,
         laid_fraction: obs.laid_fraction,
@@ -902,6 +941,12 @@ fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &References) -> Samp
         f_tot_geo_n: nan,
         f_floor_geo_n: nan,
         f_int_geo_n: nan,
+        l_o: if rolling { obs.angular_momentum_o } else { nan },
+        l_o_eq14,
+        dl_o_dt_n_m: nan,
+        tau_o_n_m: nan,
+        tau_o_eq16_n_m: nan,
+        tau_offcentre_n_m: nan,
         n_tot_ref_n: forces.map_or(nan, |f| f.0),
         f_tot_ref_n: forces.map_or(nan, |f| f.1),
         active_bodies: obs.active_bodies,
