@@ -135,7 +135,22 @@ pub fn force_table(report: &RunReport, samples: &[Sample]) -> String {
         );
         return o;
     }
-    let mg = scene.tape.mass_kg * scene.g_m_s2;
+    // Gaps and spread in units of M g; with no gravity, of the largest N_tot simulated.
+    let (mg, unit) = if scene.g_m_s2 > 0.0 {
+        (scene.tape.mass_kg * scene.g_m_s2, "M g")
+    } else {
+        let n = FORCE_FRACTIONS
+            .iter()
+            .flat_map(|&f| {
+                [
+                    window_mean(samples, f, FORCE_WINDOW, |s| s.n_tot_n),
+                    window_mean(samples, f, FORCE_WINDOW, |s| s.f_tot_n),
+                ]
+            })
+            .flatten()
+            .fold(0.0_f64, |a, n| a.max(n.abs()));
+        (n.max(f64::MIN_POSITIVE), "the largest force")
+    };
     let _ = writeln!(
         o,
         "Constraint forces (N), the simulation's averaged over f +- {FORCE_WINDOW}: the \
@@ -152,7 +167,9 @@ pub fn force_table(report: &RunReport, samples: &[Sample]) -> String {
     for f in FORCE_FRACTIONS {
         let mean = |g: fn(&Sample) -> f64| window_mean(samples, f, FORCE_WINDOW, g);
         let paper = forces.as_ref().and_then(|r| r(f));
-        for (k, (_, sim, geo)) in FORCE_PAIRS.iter().enumerate() {
+        // A sticky floor holds the coil by a joint, which the simulation books in F_int.
+        let pairs = if scene.sticky { 2 } else { 4 };
+        for (k, (_, sim, geo)) in FORCE_PAIRS.iter().enumerate().take(pairs) {
             if let (Some(a), Some(b)) = (mean(*sim), mean(*geo)) {
                 gap[k] = Some(gap[k].unwrap_or(0.0).max((a - b).abs() / mg));
             }
@@ -178,7 +195,7 @@ pub fn force_table(report: &RunReport, samples: &[Sample]) -> String {
     let pct = |v: Option<f64>| v.map_or("-".into(), |v| format!("{:.2} %", 100.0 * v));
     let _ = writeln!(
         o,
-        "\nAgainst the exact model, the largest gap at these f in units of M g: N_tot {}, \
+        "\nAgainst the exact model, the largest gap at these f in units of {unit}: N_tot {}, \
          F_tot {} (target 1 %); F {}, F_int {} (target 2 %; the rigid model cannot split \
          F_tot, its split is the least pull in the laid tape). Spread of the simulation about \
          a line over each window: N_tot {}, F_tot {}, F {}, F_int {} (target 1 %).",
@@ -191,7 +208,14 @@ pub fn force_table(report: &RunReport, samples: &[Sample]) -> String {
         pct(spread[2]),
         pct(spread[3]),
     );
-    if let Some(f) = report.geo_hop_fraction {
+    if scene.sticky {
+        let _ = writeln!(
+            o,
+            "On a sticky floor the hold is a joint, not a contact: the simulation books it in \
+             F_int, so F and F_int are not compared."
+        );
+    }
+    if let (Some(f), false) = (report.geo_hop_fraction, scene.sticky) {
         let _ = writeln!(
             o,
             "The exact model needs a floor that pulls (N_tot < 0) from f = {f:.4} on: there it \
@@ -530,13 +554,22 @@ pub fn torque_table(report: &RunReport, samples: &[Sample]) -> String {
             "\nThe identity dL_O/dt = tau_O holds in the simulation to {:.1} % of the largest \
              |tau_O| (the measurement's error: contact points read at the step's start). Eq. \
              (14) is off the simulation's L_O by up to {:+.1} % (f = {f14}); eq. (16) off its \
-             tau_O by up to {:+.1} % of the largest |tau_O| (f = {f16}). The spiral's off-centre mass makes {:.0}-{:.0} % of eq. (16)'s \
-             gap; the rest is the floor's and the laid tape's forces at their own points.",
+             tau_O by up to {:+.1} % of the largest |tau_O| (f = {f16}).{}",
             100.0 * worst_gap,
             100.0 * e14,
             100.0 * e16,
-            100.0 * share(f64::min),
-            100.0 * share(f64::max),
+            if scene.g_m_s2 > 0.0 {
+                format!(
+                    " The spiral's off-centre mass makes {:.0}-{:.0} % of eq. (16)'s gap; the \
+                     rest is the floor's and the laid tape's forces at their own points.",
+                    100.0 * share(f64::min),
+                    100.0 * share(f64::max)
+                )
+            } else {
+                " With no gravity, nothing is off-centre in eq. (16): what it misses is the \
+                 floor's and the laid tape's forces at their own points."
+                    .to_string()
+            },
         );
         if c1 {
             let _ = writeln!(
