@@ -26,7 +26,7 @@
 #                 (each setting an ensemble of 8 pushes, 0.100-0.107 m/s)
 #   approach      yoga mat rolled to its last link: where x' stops diverging, against b and
 #                 links per turn
-#   yoga-run      the yoga mat's run plots (motion, energy, approach) into docs/yoga-mat/
+#   yoga-run      the yoga mat's run plots (motion, energy, approach, forces) into docs/yoga-mat/
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release --locked --quiet
@@ -152,7 +152,7 @@ run_study() {
     "$bin" run $yoga --out runs/yoga-mat > /dev/null
     "$bin" plot runs/yoga-mat > /dev/null
     mkdir -p docs/yoga-mat
-    cp runs/yoga-mat/motion.svg runs/yoga-mat/energy.svg runs/yoga-mat/approach.svg \
+    cp runs/yoga-mat/motion.svg runs/yoga-mat/energy.svg runs/yoga-mat/approach.svg runs/yoga-mat/forces.svg \
       docs/yoga-mat/ ;;
   *) echo "unknown study $1" >&2; exit 2 ;;
   esac
