@@ -769,7 +769,7 @@ mod tests {
             .filter(|c| !required.contains(c))
             .count();
         assert_eq!(
-            refs, 32,
+            refs, 33,
             "optional: r_ref..friction_ref, the exact model, r_ft, the valid reference, theta, \
              the forces and torques on the moving part (none after the release) and the exact model's"
         );

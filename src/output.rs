@@ -18,7 +18,7 @@ use crate::run::{Observer, RunReport, Sample};
 use crate::scene::Scene;
 
 /// Column names of `samples.csv`, in order.
-pub const CSV_COLUMNS: [&str; 55] = [
+pub const CSV_COLUMNS: [&str; 56] = [
     "t_s",
     "laid_fraction",
     "r_m",
@@ -65,6 +65,7 @@ pub const CSV_COLUMNS: [&str; 55] = [
     "f_int_geo_n",
     "l_o",
     "l_o_eq14",
+    "l_o_geo",
     "dl_o_dt_n_m",
     "tau_o_n_m",
     "tau_o_eq16_n_m",
@@ -76,7 +77,7 @@ pub const CSV_COLUMNS: [&str; 55] = [
     "max_penetration_m",
 ];
 
-fn sample_values(s: &Sample) -> [f64; 55] {
+fn sample_values(s: &Sample) -> [f64; 56] {
     #[allow(clippy::cast_precision_loss)]
     let bodies = s.active_bodies as f64;
     [
@@ -126,6 +127,7 @@ fn sample_values(s: &Sample) -> [f64; 55] {
         s.f_int_geo_n,
         s.l_o,
         s.l_o_eq14,
+        s.l_o_geo,
         s.dl_o_dt_n_m,
         s.tau_o_n_m,
         s.tau_o_eq16_n_m,

@@ -628,6 +628,23 @@ impl ExactGeometry {
         Some([pose.mass_kg * w * c[1], -pose.mass_kg * w * c[0]])
     }
 
+    /// Angular momentum of the rolling spiral about the origin, the laid tape's outer end on
+    /// the floor's contact plane `(0, b/2)`, counter-clockwise (kg m^2/s): `r x P` of its
+    /// centre of mass plus its spin about it, `-I_cm omega`. `None` when sliding.
+    pub fn angular_momentum_o(&self, psi: f64) -> Option<f64> {
+        if self.sliding {
+            return None;
+        }
+        let pose = self.pose(psi);
+        let w = Spiral::turn_rate(psi) * self.psidot(psi);
+        let half_b = 0.5 * self.p.thickness_m;
+        let c = [pose.x_cm - pose.laid_m, pose.y_cm - half_b];
+        let m = pose.mass_kg;
+        let p = [m * w * c[1], -m * w * c[0]];
+        let i_cm = pose.inertia_peel - m * (c[0] * c[0] + c[1] * c[1]);
+        Some(pose.x_cm * p[1] - (pose.y_cm - half_b) * p[0] - i_cm * w)
+    }
+
     /// `(F_tot, N_tot)` of the rolling spiral from the rate of change of its momentum: every
     /// point of it turns about the peel point, so with `c` its centre of mass from there and
     /// `omega` its clockwise spin, `P = m omega (c_y, -c_x)`; by central differences in `psi`

@@ -117,12 +117,16 @@ pub struct Sample {
     /// Exact-geometry model: the laid tape's horizontal force on the spiral, `F_int` (N).
     pub f_int_geo_n: f64,
     /// Angular momentum of the moving part about the origin (the laid tape's outer end, on
-    /// the contact plane), counter-clockwise (kg m^2/s).
+    /// the contact plane) over the last step, from how far it moved, counter-clockwise
+    /// (kg m^2/s).
     pub l_o: f64,
     /// Eq. (14) at the simulation's r and r' (from x' by constraint (1)): the coil as a disc
     /// (kg m^2/s).
     pub l_o_eq14: f64,
-    /// Rate of change of the moving part's `L_O` over the force window (N m).
+    /// The exact-geometry model's `L_O` at the simulation's laid fraction (kg m^2/s).
+    pub l_o_geo: f64,
+    /// Rate of change of the moving part's `L_O` over the force window, from the velocities
+    /// the engine reports after each step (N m).
     pub dl_o_dt_n_m: f64,
     /// Torque about the origin of every external force on the moving part, gravity, the
     /// floor and the laid tape's pull, at the points where they act (N m).
@@ -943,6 +947,13 @@ fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &References) -> Samp
         f_int_geo_n: nan,
         l_o: if rolling { obs.angular_momentum_o } else { nan },
         l_o_eq14,
+        l_o_geo: if rolling && refs.floor_grip.is_some() {
+            refs.exact
+                .angular_momentum_o(refs.exact.psi_at_fraction(obs.laid_fraction))
+                .unwrap_or(nan)
+        } else {
+            nan
+        },
         dl_o_dt_n_m: nan,
         tau_o_n_m: nan,
         tau_o_eq16_n_m: nan,
