@@ -108,14 +108,15 @@ pub fn window_spread(
     Some((my, (ss / (n - 2.0)).sqrt()))
 }
 
-/// The forces compared, each as (label, simulation's column, exact model's column).
-type ForcePair = (&'static str, fn(&Sample) -> f64, fn(&Sample) -> f64);
+/// The forces compared, each as (simulation's column, exact model's column): `N_tot`,
+/// `F_tot`, `F`, `F_int`.
+type ForcePair = (fn(&Sample) -> f64, fn(&Sample) -> f64);
 
 const FORCE_PAIRS: [ForcePair; 4] = [
-    ("N_tot", |s| s.n_tot_n, |s| s.n_tot_geo_n),
-    ("F_tot", |s| s.f_tot_n, |s| s.f_tot_geo_n),
-    ("F", |s| s.f_floor_n, |s| s.f_floor_geo_n),
-    ("F_int", |s| s.f_int_n, |s| s.f_int_geo_n),
+    (|s| s.n_tot_n, |s| s.n_tot_geo_n),
+    (|s| s.f_tot_n, |s| s.f_tot_geo_n),
+    (|s| s.f_floor_n, |s| s.f_floor_geo_n),
+    (|s| s.f_int_n, |s| s.f_int_geo_n),
 ];
 
 /// The constraint-force table of one run: the simulation's `N_tot`, `F_tot` (momentum
@@ -135,22 +136,6 @@ pub fn force_table(report: &RunReport, samples: &[Sample]) -> String {
         );
         return o;
     }
-    // Gaps and spread in units of M g; with no gravity, of the largest N_tot simulated.
-    let (mg, unit) = if scene.g_m_s2 > 0.0 {
-        (scene.tape.mass_kg * scene.g_m_s2, "M g")
-    } else {
-        let n = FORCE_FRACTIONS
-            .iter()
-            .flat_map(|&f| {
-                [
-                    window_mean(samples, f, FORCE_WINDOW, |s| s.n_tot_n),
-                    window_mean(samples, f, FORCE_WINDOW, |s| s.f_tot_n),
-                ]
-            })
-            .flatten()
-            .fold(0.0_f64, |a, n| a.max(n.abs()));
-        (n.max(f64::MIN_POSITIVE), "the largest force")
-    };
     let _ = writeln!(
         o,
         "Constraint forces (N), the simulation's averaged over f +- {FORCE_WINDOW}: the \
@@ -163,42 +148,85 @@ pub fn force_table(report: &RunReport, samples: &[Sample]) -> String {
     );
     let _ = writeln!(o, "|---|---|---|---|---|---|---|---|---|---|---|");
     let show = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.4}"));
+    for f in FORCE_FRACTIONS {
+        let mean = |g: fn(&Sample) -> f64| show(window_mean(samples, f, FORCE_WINDOW, g));
+        let paper = forces.as_ref().and_then(|r| r(f));
+        let [n, fx, fl, fi] = FORCE_PAIRS.map(|(sim, geo)| (mean(sim), mean(geo)));
+        let _ = writeln!(
+            o,
+            "| {f} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            n.0,
+            n.1,
+            show(paper.map(|r| r.0)),
+            fx.0,
+            fx.1,
+            show(paper.map(|r| r.1)),
+            fl.0,
+            fl.1,
+            fi.0,
+            fi.1,
+        );
+    }
+    o.push_str(&force_gaps(scene, samples));
+    o.push_str(&force_notes(report, samples));
+    let last = report
+        .milestones
+        .iter()
+        .filter_map(|m| m.t_sim_s.map(|_| m.laid_fraction))
+        .fold(0.0, f64::max)
+        .min(0.95);
+    if let Some(forces) = &forces {
+        let _ = writeln!(
+            o,
+            "F_tot changes sign at f = {} in the simulation and at f = {} in the paper's form.",
+            show(sim_sign_change(samples, last)),
+            show(sign_change_fraction(forces, last)),
+        );
+    }
+    if matches!(Case::of(scene), Case::Coil) {
+        o.push_str(&eq11_against_eq30(report, samples));
+    }
+    o
+}
+
+/// The largest gap of each simulated force to the exact model's over the table's laid
+/// fractions, and its largest spread about a line over a window, in units of `M g` (with
+/// no gravity, of the largest force simulated).
+fn force_gaps(scene: &Scene, samples: &[Sample]) -> String {
+    let (mg, unit) = if scene.g_m_s2 > 0.0 {
+        (scene.tape.mass_kg * scene.g_m_s2, "M g")
+    } else {
+        let n = FORCE_FRACTIONS
+            .iter()
+            .flat_map(|&f| {
+                FORCE_PAIRS[..2]
+                    .iter()
+                    .map(move |&(sim, _)| window_mean(samples, f, FORCE_WINDOW, sim))
+            })
+            .flatten()
+            .fold(0.0_f64, |a, n| a.max(n.abs()));
+        (n.max(f64::MIN_POSITIVE), "the largest force")
+    };
+    // A sticky floor holds the coil by a joint, which the simulation books in F_int.
+    let pairs = if scene.sticky { 2 } else { 4 };
     let (mut gap, mut spread) = ([None::<f64>; 4], [None::<f64>; 4]);
     for f in FORCE_FRACTIONS {
-        let mean = |g: fn(&Sample) -> f64| window_mean(samples, f, FORCE_WINDOW, g);
-        let paper = forces.as_ref().and_then(|r| r(f));
-        // A sticky floor holds the coil by a joint, which the simulation books in F_int.
-        let pairs = if scene.sticky { 2 } else { 4 };
-        for (k, (_, sim, geo)) in FORCE_PAIRS.iter().enumerate().take(pairs) {
-            if let (Some(a), Some(b)) = (mean(*sim), mean(*geo)) {
+        for (k, &(sim, geo)) in FORCE_PAIRS.iter().enumerate().take(pairs) {
+            let mean = |g: fn(&Sample) -> f64| window_mean(samples, f, FORCE_WINDOW, g);
+            if let (Some(a), Some(b)) = (mean(sim), mean(geo)) {
                 gap[k] = Some(gap[k].unwrap_or(0.0).max((a - b).abs() / mg));
             }
             if let Some((_, sd)) = window_spread(samples, f, FORCE_WINDOW, sim) {
                 spread[k] = Some(spread[k].unwrap_or(0.0).max(sd / mg));
             }
         }
-        let _ = writeln!(
-            o,
-            "| {f} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-            show(mean(|s| s.n_tot_n)),
-            show(mean(|s| s.n_tot_geo_n)),
-            show(paper.map(|r| r.0)),
-            show(mean(|s| s.f_tot_n)),
-            show(mean(|s| s.f_tot_geo_n)),
-            show(paper.map(|r| r.1)),
-            show(mean(|s| s.f_floor_n)),
-            show(mean(|s| s.f_floor_geo_n)),
-            show(mean(|s| s.f_int_n)),
-            show(mean(|s| s.f_int_geo_n)),
-        );
     }
     let pct = |v: Option<f64>| v.map_or("-".into(), |v| format!("{:.2} %", 100.0 * v));
-    let _ = writeln!(
-        o,
+    format!(
         "\nAgainst the exact model, the largest gap at these f in units of {unit}: N_tot {}, \
          F_tot {} (target 1 %); F {}, F_int {} (target 2 %; the rigid model cannot split \
          F_tot, its split is the least pull in the laid tape). Spread of the simulation about \
-         a line over each window: N_tot {}, F_tot {}, F {}, F_int {} (target 1 %).",
+         a line over each window: N_tot {}, F_tot {}, F {}, F_int {} (target 1 %).\n",
         pct(gap[0]),
         pct(gap[1]),
         pct(gap[2]),
@@ -207,7 +235,14 @@ pub fn force_table(report: &RunReport, samples: &[Sample]) -> String {
         pct(spread[1]),
         pct(spread[2]),
         pct(spread[3]),
-    );
+    )
+}
+
+/// Where the force comparison stops: a sticky floor's hold, the exact model's hop, where its
+/// laid tape must pull.
+fn force_notes(report: &RunReport, samples: &[Sample]) -> String {
+    let scene = &report.scene;
+    let mut o = String::new();
     if scene.sticky {
         let _ = writeln!(
             o,
@@ -232,23 +267,6 @@ pub fn force_table(report: &RunReport, samples: &[Sample]) -> String {
              tape must pull.",
             s.laid_fraction
         );
-    }
-    let last = report
-        .milestones
-        .iter()
-        .filter_map(|m| m.t_sim_s.map(|_| m.laid_fraction))
-        .fold(0.0, f64::max)
-        .min(0.95);
-    if let Some(forces) = &forces {
-        let _ = writeln!(
-            o,
-            "F_tot changes sign at f = {} in the simulation and at f = {} in the paper's form.",
-            show(sim_sign_change(samples, last)),
-            show(sign_change_fraction(forces, last)),
-        );
-    }
-    if matches!(Case::of(scene), Case::Coil) {
-        o.push_str(&eq11_against_eq30(report, samples));
     }
     o
 }
@@ -492,104 +510,137 @@ pub fn torque_table(report: &RunReport, samples: &[Sample]) -> String {
         if c1 { "---|" } else { "" }
     );
     let show = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.5}"));
-    let (mut worst14, mut worst16, mut worst_gap, mut explained) =
-        (None::<(f64, f64)>, None::<(f64, f64)>, 0.0_f64, Vec::new());
-    let mut worst_geo = None::<f64>;
-    // Torques change sign during the unroll: gaps are in units of the largest |tau_O|.
-    let scale = FORCE_FRACTIONS
+    let rows: Vec<TorqueRow> = FORCE_FRACTIONS
         .iter()
-        .filter_map(|&f| window_mean(samples, f, FORCE_WINDOW, |s| s.tau_o_n_m))
-        .fold(0.0_f64, |a, t| a.max(t.abs()))
-        .max(f64::MIN_POSITIVE);
-    for f in FORCE_FRACTIONS {
-        let mean = |g: fn(&Sample) -> f64| window_mean(samples, f, FORCE_WINDOW, g);
-        let (Some(l), Some(l14), Some(dl), Some(tau), Some(t16), Some(off)) = (
-            mean(|s| s.l_o),
-            mean(|s| s.l_o_eq14),
-            mean(|s| s.dl_o_dt_n_m),
-            mean(|s| s.tau_o_n_m),
-            mean(|s| s.tau_o_eq16_n_m),
-            mean(|s| s.tau_offcentre_n_m),
-        ) else {
-            continue;
-        };
-        let rest = tau - t16 - off;
-        let lg = mean(|s| s.l_o_geo);
-        if let Some(lg) = lg {
-            worst_geo = Some(worst_geo.unwrap_or(0.0).max((l / lg - 1.0).abs()));
-        }
-        let e14 = l14 / l - 1.0;
-        let e16 = (t16 - tau) / scale;
-        if worst14.is_none_or(|w| e14.abs() > w.1.abs()) {
-            worst14 = Some((f, e14));
-        }
-        if worst16.is_none_or(|w| e16.abs() > w.1.abs()) {
-            worst16 = Some((f, e16));
-        }
-        worst_gap = worst_gap.max((dl - tau).abs() / scale);
-        explained.push(off / (tau - t16));
+        .filter_map(|&f| TorqueRow::at(samples, f))
+        .collect();
+    for r in &rows {
         let couple = if c1 {
             // ERRATA C1: the laid tape's weight along the slope at height b/2, its friction
             // at y = 0.
             let m = scene.tape.mass_kg;
             format!(
                 " {:.5} |",
-                -m * f * scene.g_m_s2 * scene.tape.thickness_m * slope.sin() / 2.0
+                -m * r.f * scene.g_m_s2 * scene.tape.thickness_m * slope.sin() / 2.0
             )
         } else {
             String::new()
         };
         let _ = writeln!(
             o,
-            "| {f} | {} | {} | {} | {} | {} | {} | {} | {} | {} |{couple}",
-            show(Some(l)),
-            show(lg),
-            show(Some(l14)),
-            show(Some(dl)),
-            show(Some(tau)),
-            show(Some(dl - tau)),
-            show(Some(t16)),
-            show(Some(off)),
-            show(Some(rest)),
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |{couple}",
+            r.f,
+            show(Some(r.l)),
+            show(r.l_geo),
+            show(Some(r.l14)),
+            show(Some(r.dl)),
+            show(Some(r.tau)),
+            show(Some(r.dl - r.tau)),
+            show(Some(r.t16)),
+            show(Some(r.off)),
+            show(Some(r.tau - r.t16 - r.off)),
         );
     }
-    if let (Some((f14, e14)), Some((f16, e16))) = (worst14, worst16) {
-        let share = |k: fn(f64, f64) -> f64| explained.iter().copied().fold(f64::NAN, k);
+    o.push_str(&torque_verdict(scene, samples, &rows));
+    o
+}
+
+/// One laid fraction of [`torque_table`]: the window means of its columns.
+struct TorqueRow {
+    f: f64,
+    l: f64,
+    l_geo: Option<f64>,
+    l14: f64,
+    dl: f64,
+    tau: f64,
+    t16: f64,
+    off: f64,
+}
+
+impl TorqueRow {
+    fn at(samples: &[Sample], f: f64) -> Option<Self> {
+        let mean = |g: fn(&Sample) -> f64| window_mean(samples, f, FORCE_WINDOW, g);
+        Some(Self {
+            f,
+            l: mean(|s| s.l_o)?,
+            l_geo: mean(|s| s.l_o_geo),
+            l14: mean(|s| s.l_o_eq14)?,
+            dl: mean(|s| s.dl_o_dt_n_m)?,
+            tau: mean(|s| s.tau_o_n_m)?,
+            t16: mean(|s| s.tau_o_eq16_n_m)?,
+            off: mean(|s| s.tau_offcentre_n_m)?,
+        })
+    }
+}
+
+/// What [`torque_table`]'s rows say: how well the identity holds, how far eqs. (14) and
+/// (16) are off and how much of eq. (16)'s gap the off-centre mass makes.
+fn torque_verdict(scene: &Scene, samples: &[Sample], rows: &[TorqueRow]) -> String {
+    let mut o = String::new();
+    // Torques change sign during the unroll: gaps are in units of the largest |tau_O|.
+    let scale = FORCE_FRACTIONS
+        .iter()
+        .filter_map(|&f| window_mean(samples, f, FORCE_WINDOW, |s| s.tau_o_n_m))
+        .fold(0.0_f64, |a, t| a.max(t.abs()))
+        .max(f64::MIN_POSITIVE);
+    let worst = |e: &dyn Fn(&TorqueRow) -> f64| {
+        rows.iter()
+            .map(|r| (r.f, e(r)))
+            .fold(None::<(f64, f64)>, |w, x| match w {
+                Some(w) if x.1.abs() <= w.1.abs() => Some(w),
+                _ => Some(x),
+            })
+    };
+    let (Some((f14, e14)), Some((f16, e16))) = (
+        worst(&|r| r.l14 / r.l - 1.0),
+        worst(&|r| (r.t16 - r.tau) / scale),
+    ) else {
+        return o;
+    };
+    let worst_gap = rows
+        .iter()
+        .map(|r| (r.dl - r.tau).abs() / scale)
+        .fold(0.0_f64, f64::max);
+    let worst_geo = rows
+        .iter()
+        .filter_map(|r| Some((r.l / r.l_geo? - 1.0).abs()))
+        .reduce(f64::max);
+    let explained = rows.iter().map(|r| r.off / (r.tau - r.t16));
+    let share = |k: fn(f64, f64) -> f64| explained.clone().fold(f64::NAN, k);
+    let _ = writeln!(
+        o,
+        "\nThe identity dL_O/dt = tau_O holds in the simulation to {:.1} % of the largest \
+         |tau_O| (the engine moves a body on a resting contact by a velocity that is not the \
+         one it reports after the step, which keeps the last substep's pull of gravity: \
+         the lever arm's change over the step against the reported momentum makes the \
+         gap). The \
+         simulation's L_O is the exact model's to {}. Eq. (14) is off it by up to {:+.1} % \
+         (f = {f14}); eq. (16) off its tau_O by up to {:+.1} % of the largest |tau_O| \
+         (f = {f16}).{}",
+        100.0 * worst_gap,
+        worst_geo.map_or("-".into(), |w| format!("{:.2} %", 100.0 * w)),
+        100.0 * e14,
+        100.0 * e16,
+        if scene.g_m_s2 > 0.0 {
+            format!(
+                " The spiral's off-centre mass makes {:.0}-{:.0} % of eq. (16)'s gap; the \
+                 rest is the floor's and the laid tape's forces at their own points.",
+                100.0 * share(f64::min),
+                100.0 * share(f64::max)
+            )
+        } else {
+            " With no gravity, nothing is off-centre in eq. (16): what it misses is the \
+             floor's and the laid tape's forces at their own points."
+                .to_string()
+        },
+    );
+    if scene.slope_deg != 0.0 {
         let _ = writeln!(
             o,
-            "\nThe identity dL_O/dt = tau_O holds in the simulation to {:.1} % of the largest \
-             |tau_O| (the engine moves a body on a resting contact by a velocity that is not the \
-             one it reports after the step, which keeps the last substep's pull of gravity: \
-             the lever arm's change over the step against the reported momentum makes the \
-             gap). The \
-             simulation's L_O is the exact model's to {}. Eq. (14) is off it by up to {:+.1} % \
-             (f = {f14}); eq. (16) off its tau_O by up to {:+.1} % of the largest |tau_O| \
-             (f = {f16}).{}",
-            100.0 * worst_gap,
-            worst_geo.map_or("-".into(), |w| format!("{:.2} %", 100.0 * w)),
-            100.0 * e14,
-            100.0 * e16,
-            if scene.g_m_s2 > 0.0 {
-                format!(
-                    " The spiral's off-centre mass makes {:.0}-{:.0} % of eq. (16)'s gap; the \
-                     rest is the floor's and the laid tape's forces at their own points.",
-                    100.0 * share(f64::min),
-                    100.0 * share(f64::max)
-                )
-            } else {
-                " With no gravity, nothing is off-centre in eq. (16): what it misses is the \
-                 floor's and the laid tape's forces at their own points."
-                    .to_string()
-            },
+            "C1's couple acts on the laid tape, not on the moving part: the simulation's \
+             floor is the laid tape's midline plane, where its weight along the slope and \
+             the friction that holds it act on one line, so it has no such couple."
         );
-        if c1 {
-            let _ = writeln!(
-                o,
-                "C1's couple acts on the laid tape, not on the moving part: the simulation's \
-                 floor is the laid tape's midline plane, where its weight along the slope and \
-                 the friction that holds it act on one line, so it has no such couple."
-            );
-        }
     }
     o
 }

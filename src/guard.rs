@@ -497,7 +497,6 @@ mod tests {
             max_joint_gap_m: 1e-5,
             max_penetration_m: 1e-5,
             dt_s: 1e-3,
-            momentum_kg_m_s: [0.0, 0.0],
             angular_momentum_o: 0.0,
             impulses: crate::model::StepImpulses::default(),
         }

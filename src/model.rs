@@ -140,8 +140,6 @@ pub struct Observation {
     pub max_penetration_m: f64,
     /// The last step's length (s).
     pub dt_s: f64,
-    /// Linear momentum of everything that moves, `sum m v` (kg m/s).
-    pub momentum_kg_m_s: [f64; 2],
     /// Angular momentum of the moving part (the coil and the link hanging from it) about
     /// the origin `(0, b/2)` over the last step, from how far it moved, counter-clockwise
     /// (kg m^2/s); 0 once the coil is released.
@@ -334,34 +332,6 @@ const PIN_LIFT_PER_RADIUS: f64 = 1e-4;
 
 const TAPE_GROUP: Group = Group::GROUP_1;
 const FLOOR_GROUP: Group = Group::GROUP_2;
-
-/// The force of a floor collider on everything touching it during the last step, from
-/// the contact impulses divided by `dt`: `(normal, horizontal)` in N, upward and +x
-/// positive. The sign convention is pinned by the resting- and sliding-box tests.
-pub fn floor_forces(narrow_phase: &NarrowPhase, floor: ColliderHandle, dt: f64) -> (f64, f64) {
-    if dt <= 0.0 {
-        return (0.0, 0.0);
-    }
-    let (mut fx, mut fy) = (0.0, 0.0);
-    for pair in narrow_phase.contact_pairs_with(floor) {
-        let PairContacts::Rigid(contacts) = &pair.contacts else {
-            continue;
-        };
-        // The solver pushes collider 2 along +normal and collider 1 along -normal.
-        let sign = if pair.collider1 == floor { 1.0 } else { -1.0 };
-        for manifold in contacts.solver_manifolds() {
-            let n = manifold.data.normal;
-            // Friction acts along perp(-n) on collider 1 and the opposite on collider 2.
-            let t = Vector::new(n.y, -n.x);
-            for point in &manifold.points {
-                let f = n * point.data.impulse - t * point.data.tangent_impulse.x;
-                fx += sign * f.x / dt;
-                fy += sign * f.y / dt;
-            }
-        }
-    }
-    (fy, fx)
-}
 
 /// The contact-resolved tape.
 pub struct Model {
@@ -769,13 +739,17 @@ impl Model {
         self.world.step();
         self.t += dt;
         self.last_dt = dt;
-        self.impulses = self.step_impulses(&moving, dt);
+        // The floor's contact impulses of the step, read once for the forces and the ledger.
+        let contacts: Vec<work::FloorImpulse> =
+            work::floor_impulses(&self.world.narrow_phase, &self.world.colliders, self.floor)
+                .collect();
+        self.impulses = self.step_impulses(&moving, &contacts, dt);
         self.moved_angular_momentum = self.moved_angular_momentum(&moving, dt);
         let (kinetic, potential) = self.energy();
         let after = kinetic + potential;
         match self.phase {
             Phase::Rolling => self.ledger.step_j += before - after,
-            _ => self.book_bang_step(&states, before - after, kinetic, dt),
+            _ => self.book_bang_step(&states, &contacts, before - after, kinetic, dt),
         }
 
         if let Some(coil) = self.coil {
@@ -1236,11 +1210,19 @@ impl Model {
         }
     }
 
-    /// Books one step of the final bang: the work of the floor and the joints on the moving
-    /// pieces (from their states `before` it, in the order of `free`) into the bang's ledger,
-    /// with `lost_j` what the step dissipated and `kinetic` the kinetic energy after it; the
-    /// fastest point, the floor's impulse; and ends the bang once it has come to rest.
-    fn book_bang_step(&mut self, before: &[BodyState], lost_j: f64, kinetic: f64, dt: f64) {
+    /// Books one step of the final bang: the work of the floor (its `contacts`) and the joints
+    /// on the moving pieces (from their states `before` it, in the order of `free`) into the
+    /// bang's ledger, with `lost_j` what the step dissipated and `kinetic` the kinetic energy
+    /// after it; the fastest point, the floor's impulse; and ends the bang once it has come to
+    /// rest.
+    fn book_bang_step(
+        &mut self,
+        before: &[BodyState],
+        contacts: &[work::FloorImpulse],
+        lost_j: f64,
+        kinetic: f64,
+        dt: f64,
+    ) {
         self.ledger.bang_j += lost_j;
         if self.free.is_empty() {
             // Everything is frozen: at rest.
@@ -1257,15 +1239,15 @@ impl Model {
                 before,
             })
             .collect();
-        let floor: Vec<_> =
-            work::floor_impulses(&self.world.narrow_phase, &self.world.colliders, self.floor)
-                .filter_map(|c| {
-                    #[allow(clippy::cast_possible_truncation)]
-                    let k = self.world.bodies.get(c.body)?.user_data as usize;
-                    let i = self.free.binary_search_by_key(&k, |p| p.first).ok()?;
-                    Some((i, c))
-                })
-                .collect();
+        let floor: Vec<_> = contacts
+            .iter()
+            .filter_map(|&c| {
+                #[allow(clippy::cast_possible_truncation)]
+                let k = self.world.bodies.get(c.body)?.user_data as usize;
+                let i = self.free.binary_search_by_key(&k, |p| p.first).ok()?;
+                Some((i, c))
+            })
+            .collect();
         let work = work::step_work(&bodies, &floor, self.world.gravity, dt);
         let impulse: f64 = floor.iter().map(|(_, c)| c.normal.length()).sum();
         // Potential energy above lying flat on the floor: the weight across the floor times
@@ -1438,12 +1420,17 @@ impl Model {
 
     /// The impulses of the step just taken on the moving part, `before` at its start (see
     /// [`StepImpulses`]).
-    fn step_impulses(&self, before: &MovingSnapshot, dt: f64) -> StepImpulses {
+    fn step_impulses(
+        &self,
+        before: &MovingSnapshot,
+        contacts: &[work::FloorImpulse],
+        dt: f64,
+    ) -> StepImpulses {
         let mut out = StepImpulses::default();
         let o = self.origin();
         let moving = &before.bodies;
         let mut floor_angular = 0.0;
-        for c in work::floor_impulses(&self.world.narrow_phase, &self.world.colliders, self.floor) {
+        for c in contacts {
             let f = c.normal + c.friction;
             out.floor_on_moving[0] += f.x;
             out.floor_on_moving[1] += f.y;
@@ -1492,24 +1479,6 @@ impl Model {
         out
     }
 
-    /// Linear momentum of the dynamic bodies (kg m/s).
-    fn momentum(&self) -> [f64; 2] {
-        let mut p = [0.0, 0.0];
-        for (_, body) in self.world.bodies.iter() {
-            if body.is_dynamic() {
-                let v = body.linvel();
-                p[0] += body.mass() * v.x;
-                p[1] += body.mass() * v.y;
-            }
-        }
-        p
-    }
-
-    /// Floor forces on the moving tape from the last step's contact impulses (N).
-    fn floor_forces(&self) -> (f64, f64) {
-        floor_forces(&self.world.narrow_phase, self.floor, self.last_dt)
-    }
-
     fn max_joint_gap(&self) -> f64 {
         self.world
             .impulse_joints
@@ -1541,7 +1510,13 @@ impl Model {
     pub fn observe(&mut self) -> Observation {
         let (kinetic_j, potential_j) = self.energy();
         self.energy_j = kinetic_j + potential_j;
-        let (normal_n, friction_n) = self.floor_forces();
+        // The floor's force on everything that moves over the last step.
+        let (normal_n, friction_n) = if self.last_dt > 0.0 {
+            let f = self.impulses.floor_on_moving;
+            (f[1] / self.last_dt, f[0] / self.last_dt)
+        } else {
+            (0.0, 0.0)
+        };
         let (x_m, omega) = match self.coil {
             Some(coil) => {
                 let body = &self.world.bodies[coil];
@@ -1572,7 +1547,6 @@ impl Model {
             max_joint_gap_m: self.max_joint_gap(),
             max_penetration_m: self.max_penetration(),
             dt_s: self.last_dt,
-            momentum_kg_m_s: self.momentum(),
             angular_momentum_o: self.moved_angular_momentum,
             impulses: self.impulses,
         }
@@ -1674,6 +1648,19 @@ impl Model {
 mod tests {
     use super::*;
 
+    /// The floor's force on everything touching it during the last step of length `dt`:
+    /// `(normal, horizontal)` in N, the step's contact impulses (as the model reads them)
+    /// over `dt`.
+    fn floor_forces(world: &PhysicsWorld, floor: ColliderHandle, dt: f64) -> (f64, f64) {
+        work::floor_impulses(&world.narrow_phase, &world.colliders, floor).fold(
+            (0.0, 0.0),
+            |(n, f), c| {
+                let p = c.normal + c.friction;
+                (n + p.y / dt, f + p.x / dt)
+            },
+        )
+    }
+
     /// A box of mass `m` on a halfspace floor with friction 0.5, started with speed `vx`.
     fn box_on_floor(vx: f64) -> (PhysicsWorld, ColliderHandle, RigidBodyHandle) {
         let mut world = PhysicsWorld::new();
@@ -1704,7 +1691,7 @@ mod tests {
             world.step();
         }
         let weight = world.bodies[body].mass() * 9.81;
-        let (n, f) = floor_forces(&world.narrow_phase, floor, 1e-3);
+        let (n, f) = floor_forces(&world, floor, 1e-3);
         assert!(
             (n / weight - 1.0).abs() < 0.01,
             "N = {n:.4} N, weight {weight:.4} N"
@@ -1721,7 +1708,7 @@ mod tests {
         }
         let weight = world.bodies[body].mass() * 9.81;
         assert!(world.bodies[body].linvel().x > 0.5, "still sliding");
-        let (n, f) = floor_forces(&world.narrow_phase, floor, 1e-3);
+        let (n, f) = floor_forces(&world, floor, 1e-3);
         assert!(
             (n / weight - 1.0).abs() < 0.01,
             "N = {n:.4} N, weight {weight:.4} N"

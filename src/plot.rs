@@ -306,54 +306,72 @@ pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     approach_plot(&approach, &samples, &report, upto, &name)?;
 
     let forces = dir.join("forces.svg");
-    {
-        let root = SVGBackend::new(&forces, (900, 800)).into_drawing_area();
-        root.fill(&WHITE).map_err(err)?;
-        let panels = root.split_evenly((2, 1));
-        let f = cut("laid_fraction")?;
-        let curve = |label, column: &str, color, dashed| -> anyhow::Result<Curve<'_>> {
-            // Up to f = 0.95: the forces grow without bound as the coil runs out.
+    forces_plot(&forces, &cut, &name)?;
+    Ok(vec![motion, energy, approach, forces])
+}
+
+/// `path`: `N_tot` above, `F_tot` with its split into `F` and `F_int` below, against the
+/// laid fraction up to 0.95 (the forces grow without bound as the coil runs out), the
+/// simulation's beside the exact model's; `cut` reads a column of the unroll.
+fn forces_plot(
+    path: &Path,
+    cut: &dyn Fn(&str) -> anyhow::Result<Vec<f64>>,
+    name: &str,
+) -> anyhow::Result<()> {
+    type Spec = (&'static str, &'static str, RGBColor, bool);
+    let panels: [(String, &str, Vec<Spec>, SeriesLabelPosition); 2] = [
+        (
+            format!("{name}: upward force on the moving part, N_tot (link-period means)"),
+            "N_tot (N)",
+            vec![
+                ("simulation", "n_tot_n", SIM, false),
+                ("exact-geometry model", "n_tot_geo_n", EXACT, true),
+                ("paper (eq. 9, A4)", "n_tot_ref_n", EQ7, true),
+            ],
+            SeriesLabelPosition::UpperRight,
+        ),
+        (
+            format!("{name}: F_tot = F (floor) + F_int (laid tape), +x positive"),
+            "force (N)",
+            vec![
+                ("F_tot simulation", "f_tot_n", SIM, false),
+                ("F_tot exact", "f_tot_geo_n", SIM, true),
+                ("F simulation", "f_floor_n", EXACT, false),
+                ("F exact (least pull)", "f_floor_geo_n", EXACT, true),
+                ("F_int simulation", "f_int_n", EQ7, false),
+                ("F_int exact (least pull)", "f_int_geo_n", EQ7, true),
+            ],
+            SeriesLabelPosition::LowerLeft,
+        ),
+    ];
+    let root = SVGBackend::new(path, (900, 800)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let areas = root.split_evenly((2, 1));
+    let f = cut("laid_fraction")?;
+    for (area, (caption, y_desc, specs, legend_at)) in areas.iter().zip(panels) {
+        let mut curves = Vec::new();
+        for (label, column, color, dashed) in specs {
             let mut points = pairs(&f, &cut(column)?);
             points.retain(|p| p.0 <= 0.95);
-            Ok(Curve {
+            curves.push(Curve {
                 label,
                 points,
                 color,
                 dashed,
-            })
-        };
+            });
+        }
         line_chart(
-            &panels[0],
-            &format!("{name}: upward force on the moving part, N_tot (link-period means)"),
+            area,
+            &caption,
             "laid fraction f",
-            "N_tot (N)",
-            &[
-                curve("simulation", "n_tot_n", SIM, false)?,
-                curve("exact-geometry model", "n_tot_geo_n", EXACT, true)?,
-                curve("paper (eq. 9, A4)", "n_tot_ref_n", EQ7, true)?,
-            ],
-            SeriesLabelPosition::UpperRight,
+            y_desc,
+            &curves,
+            legend_at,
             |_| Ok(()),
         )?;
-        line_chart(
-            &panels[1],
-            &format!("{name}: F_tot = F (floor) + F_int (laid tape), +x positive"),
-            "laid fraction f",
-            "force (N)",
-            &[
-                curve("F_tot simulation", "f_tot_n", SIM, false)?,
-                curve("F_tot exact", "f_tot_geo_n", SIM, true)?,
-                curve("F simulation", "f_floor_n", EXACT, false)?,
-                curve("F exact (least pull)", "f_floor_geo_n", EXACT, true)?,
-                curve("F_int simulation", "f_int_n", EQ7, false)?,
-                curve("F_int exact (least pull)", "f_int_geo_n", EQ7, true)?,
-            ],
-            SeriesLabelPosition::LowerLeft,
-            |_| Ok(()),
-        )?;
-        root.present().map_err(err)?;
     }
-    Ok(vec![motion, energy, approach, forces])
+    root.present().map_err(err)?;
+    Ok(())
 }
 
 /// The bang alone, from its release `bang_t` on, on a log time axis (its impacts take a

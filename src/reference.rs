@@ -374,6 +374,16 @@ pub struct GeoForces {
     pub f_int_n: f64,
 }
 
+/// The exact model's spiral in motion: its pose, clockwise spin `omega` (rad/s), centre of
+/// mass from the peel point `c` (m) and momentum (kg m/s).
+#[derive(Debug, Clone, Copy)]
+struct Motion {
+    pose: Pose,
+    spin: f64,
+    c: [f64; 2],
+    momentum: [f64; 2],
+}
+
 /// Geometry of the coil with its lowest point at a given spiral parameter.
 #[derive(Debug, Clone, Copy)]
 struct Pose {
@@ -612,20 +622,29 @@ impl ExactGeometry {
         self.traj.q_at(t)
     }
 
-    /// Momentum of the rolling spiral with its lowest point at `psi` (kg m/s): every point
-    /// of it turns about the peel point, so with `c` its centre of mass from there and
-    /// `omega` its clockwise spin, `P = m omega (c_y, -c_x)`. `None` when sliding.
-    pub fn momentum(&self, psi: f64) -> Option<[f64; 2]> {
-        if self.sliding {
-            return None;
-        }
+    /// The spiral's motion with its lowest point at `psi`: every point of it turns about the
+    /// peel point, so with `c` its centre of mass from there and `omega` its clockwise spin,
+    /// its momentum is `P = m omega (c_y, -c_x)`. Sliding, `P_x` is `NaN`: the material at
+    /// the contact slides along the floor, which adds nothing to `P_y`.
+    fn motion(&self, psi: f64) -> Motion {
         let pose = self.pose(psi);
-        let w = Spiral::turn_rate(psi) * self.psidot(psi);
+        let spin = Spiral::turn_rate(psi) * self.psidot(psi);
         let c = [
             pose.x_cm - pose.laid_m,
             pose.y_cm - 0.5 * self.p.thickness_m,
         ];
-        Some([pose.mass_kg * w * c[1], -pose.mass_kg * w * c[0]])
+        let m = pose.mass_kg;
+        let p_x = if self.sliding {
+            f64::NAN
+        } else {
+            m * spin * c[1]
+        };
+        Motion {
+            pose,
+            spin,
+            c,
+            momentum: [p_x, -m * spin * c[0]],
+        }
     }
 
     /// Angular momentum of the rolling spiral about the origin, the laid tape's outer end on
@@ -635,39 +654,22 @@ impl ExactGeometry {
         if self.sliding {
             return None;
         }
-        let pose = self.pose(psi);
-        let w = Spiral::turn_rate(psi) * self.psidot(psi);
-        let half_b = 0.5 * self.p.thickness_m;
-        let c = [pose.x_cm - pose.laid_m, pose.y_cm - half_b];
-        let m = pose.mass_kg;
-        let p = [m * w * c[1], -m * w * c[0]];
-        let i_cm = pose.inertia_peel - m * (c[0] * c[0] + c[1] * c[1]);
-        Some(pose.x_cm * p[1] - (pose.y_cm - half_b) * p[0] - i_cm * w)
+        let Motion {
+            pose,
+            spin,
+            c,
+            momentum: p,
+        } = self.motion(psi);
+        let i_cm = pose.inertia_peel - pose.mass_kg * (c[0] * c[0] + c[1] * c[1]);
+        Some(pose.x_cm * p[1] - c[1] * p[0] - i_cm * spin)
     }
 
-    /// `(F_tot, N_tot)` of the rolling spiral from the rate of change of its momentum: every
-    /// point of it turns about the peel point, so with `c` its centre of mass from there and
-    /// `omega` its clockwise spin, `P = m omega (c_y, -c_x)`; by central differences in `psi`
-    /// (N). Sliding, `F_tot` is `NaN` and `N_tot` holds: the material at the contact slides
-    /// along the floor, which adds nothing to the vertical momentum `-m omega c_x`.
+    /// `(F_tot, N_tot)` of the spiral from the rate of change of its momentum (see
+    /// [`Self::motion`]), by central differences in `psi` (N). Sliding, `F_tot` is `NaN`.
     fn force_from_momentum(&self, psi: f64) -> [f64; 2] {
         let h = 1e-4;
-        let momentum = |q: f64| {
-            let pose = self.pose(q);
-            let w = Spiral::turn_rate(q) * self.psidot(q);
-            let c = [
-                pose.x_cm - pose.laid_m,
-                pose.y_cm - 0.5 * self.p.thickness_m,
-            ];
-            let x = if self.sliding {
-                f64::NAN
-            } else {
-                pose.mass_kg * w * c[1]
-            };
-            [x, -pose.mass_kg * w * c[0]]
-        };
-        let p1 = momentum(psi + h);
-        let p0 = momentum(psi - h);
+        let p1 = self.motion(psi + h).momentum;
+        let p0 = self.motion(psi - h).momentum;
         // psi falls as the spiral rolls: psi' = -|psi'|.
         let rate = -self.psidot(psi) / (2.0 * h);
         let m = self.pose(psi).mass_kg;
@@ -690,8 +692,9 @@ impl ExactGeometry {
     }
 
     /// The constraint forces on the rolling spiral with its lowest point at `psi` (N), from
-    /// its momentum (see [`Self::normal_force_n`]): the tape it sheds leaves at the peel point, where the velocity is zero,
-    /// and carries no momentum away, so `dP/dt` is the force of everything but gravity.
+    /// its momentum (see [`Self::motion`]): the tape it sheds leaves at the peel point, where
+    /// the velocity is zero, and carries no momentum away, so `dP/dt` is the force of
+    /// everything but gravity.
     ///
     /// ```text
     /// N_tot = dP_y/dt + m g cos(a),   F_tot = dP_x/dt - m g sin(a),   d/dt = psi' d/dpsi
