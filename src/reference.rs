@@ -947,6 +947,24 @@ mod tests {
     }
 
     #[test]
+    fn exact_spirals_centre_of_mass_is_three_b_over_two_pi_ahead_of_the_peel_point() {
+        // The axis is b / (2 pi) ahead of the peel point and the centre of mass b / pi
+        // further, tied to the outer end: this offset makes the vertical momentum about
+        // 3 m r' and gravity's torque miss eq. (16). `cargo test --release --lib
+        // three_b_over -- --nocapture` prints the figures.
+        for p in [yoga(0.3), thin(0.1)] {
+            let b = p.thickness_m;
+            let e = ExactGeometry::new(p, 2.0 * b);
+            for f in [0.1, 0.5, 0.9] {
+                let pose = e.pose(e.psi_at_fraction(f));
+                let ahead = (pose.x_cm - pose.laid_m) / (3.0 * b / (2.0 * PI));
+                eprintln!("b = {b} m, f = {f}: centre of mass {ahead:.5} x 3b/(2 pi) ahead");
+                assert!((ahead - 1.0).abs() < 0.01, "b = {b}, f = {f}: {ahead}");
+            }
+        }
+    }
+
+    #[test]
     fn exact_geometry_normal_force_starts_at_the_weight_and_turns_negative_only_late() {
         // At the start the coil barely accelerates vertically: N ~ M g. The spiral's offset
         // centre of mass is locked to the peel point, so N does not swing once per turn (a
