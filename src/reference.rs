@@ -692,7 +692,7 @@ impl ExactGeometry {
     }
 
     /// The constraint forces on the rolling spiral with its lowest point at `psi` (N), from
-    /// its momentum (see [`Self::motion`]): the tape it sheds leaves at the peel point, where
+    /// its momentum `P = m omega (c_y, -c_x)`: the tape it sheds leaves at the peel point, where
     /// the velocity is zero, and carries no momentum away, so `dP/dt` is the force of
     /// everything but gravity.
     ///
