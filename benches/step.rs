@@ -10,8 +10,8 @@ use std::time::{Duration, Instant};
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 
 use uncoil::model::{Model, Phase};
-use uncoil::overrides::{Override, scene_file_with_overrides};
 use uncoil::scene::Scene;
+use uncoil::scene::overrides::{Override, scene_file_with_overrides};
 
 fn scene(file: &str, links_per_turn: u32) -> Scene {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))

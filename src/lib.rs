@@ -2,28 +2,27 @@
 //! rapier2d and held against K. T. McDonald's continuum theory ("Uncoiling on a Horizontal
 //! Surface", with the corrections listed in ERRATA.md).
 //!
-//! The pipeline: [`scene`] (TOML -> validated `Scene`) -> [`model`] (rapier) and
-//! [`reference`](mod@reference) (pure `f64`) -> [`run`] (loop, samples, report) -> [`output`] (files and
-//! the summary). Around it: [`overrides`] (scene keys set from the command line),
-//! [`sweep`] (grids of runs, one CSV row each), [`analysis`] (Pareto front, convergence
-//! orders) and [`plot`] (SVG pictures of a run or a sweep).
+//! The crate is a stack of layers; each imports only the layers below it (a test,
+//! `layers::each_layer_imports_only_the_layers_below_it`, keeps the rule):
+//!
+//! ```text
+//! 6 study    check, sweep, analysis, plot          many runs, a run's files
+//! 5 output   CSV, JSON, summary, tables, MCAP      observers and what they print
+//! 4 run      the loop, samples, guards, frames     puts the model beside the theory
+//! 3 model    rapier: the chain, the coil, the bang | theory  eq. 7, eq. 17, exact model,
+//!                                                  |         rivals, forces (pure f64)
+//! 2 spiral   the Archimedean midline (pure f64)
+//! 1 scene    TOML file, validation, overrides
+//! ```
+//!
+//! [`model`] and [`theory`] stand side by side: neither imports the other. The binary
+//! (`src/main.rs`) is a thin command line on top.
 
-pub mod analysis;
-pub mod check;
-pub mod compare;
-pub mod force_window;
-pub mod forces;
-pub mod frame;
-pub mod guard;
-pub mod inspect;
-pub mod mcap_log;
-pub mod model;
 pub mod output;
-pub mod overrides;
-pub mod plot;
-pub mod reference;
-pub mod rivals;
 pub mod run;
 pub mod scene;
 pub mod spiral;
-pub mod sweep;
+pub mod study;
+pub mod theory;
+
+pub mod model;

@@ -16,14 +16,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use anyhow::Context as _;
 use clap::{Parser, Subcommand};
 
-use uncoil::check;
-use uncoil::compare::{SampleLog, table};
-use uncoil::guard::Status;
-use uncoil::mcap_log::McapObserver;
+use uncoil::output::compare::{SampleLog, table};
+use uncoil::output::mcap::McapObserver;
 use uncoil::output::{CsvObserver, ReportObserver, summary};
-use uncoil::overrides::{Override, scene_file_with_overrides};
+use uncoil::run::stop::{Status, StopReason};
 use uncoil::run::{Observer, run, run_until};
 use uncoil::scene::Scene;
+use uncoil::scene::overrides::{Override, scene_file_with_overrides};
+use uncoil::study::check;
 
 #[derive(Parser)]
 #[command(
@@ -58,9 +58,9 @@ enum Command {
         file: PathBuf,
     },
     /// Run a scene over the product grid of the varied keys, one row per run in sweep.csv.
-    Sweep(sweep_cmd::SweepArgs),
+    Sweep(cli::sweep::SweepArgs),
     /// Report on a sweep: Pareto and convergence plots (SVG) and report.md (also on stdout).
-    SweepReport(sweep_cmd::ReportArgs),
+    SweepReport(cli::sweep::ReportArgs),
     /// Draw a run's motion.svg and energy.svg from its samples.csv and report.json.
     Plot {
         /// A run's output folder, e.g. runs/yoga-mat.
@@ -84,15 +84,18 @@ enum Command {
     },
 }
 
-mod sweep_cmd;
+mod cli {
+    //! The subcommands that are more than a call into the library.
+    pub mod sweep;
+}
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Check { dir, out } => check(dir, out),
-        Command::Sweep(args) => sweep_cmd::sweep(args),
-        Command::SweepReport(args) => sweep_cmd::report(&args),
-        Command::Plot { dir } => match uncoil::plot::plot_run(&dir) {
+        Command::Sweep(args) => cli::sweep::sweep(args),
+        Command::SweepReport(args) => cli::sweep::report(&args),
+        Command::Plot { dir } => match uncoil::study::plot::plot_run(&dir) {
             Ok(files) => {
                 for f in files {
                     println!("wrote {}", f.display());
@@ -104,9 +107,9 @@ fn main() -> ExitCode {
                 ExitCode::from(1)
             }
         },
-        Command::Inspect { file } => match uncoil::inspect::read_inventory(&file) {
+        Command::Inspect { file } => match uncoil::output::inspect::read_inventory(&file) {
             Ok(inv) => {
-                print!("{}", uncoil::inspect::describe(&file, &inv));
+                print!("{}", uncoil::output::inspect::describe(&file, &inv));
                 ExitCode::SUCCESS
             }
             Err(e) => {
@@ -140,19 +143,19 @@ fn main() -> ExitCode {
                 eprintln!("warning: Ctrl-C will not finish the files: {e}");
             }
             match run_scene(&scene, out, !no_mcap, &stop) {
-                Ok((text, _, _)) if stop.load(Ordering::SeqCst) => {
+                Ok((text, end)) => {
                     print!("{text}");
-                    eprintln!("interrupted: the outputs end at the last step taken");
-                    ExitCode::from(130)
-                }
-                Ok((text, Status::Completed, _)) => {
-                    print!("{text}");
-                    ExitCode::SUCCESS
-                }
-                Ok((text, Status::Stopped, reason)) => {
-                    print!("{text}");
-                    eprintln!("error: the run was stopped by a guard: {reason}");
-                    ExitCode::from(3)
+                    match end.status() {
+                        Status::Completed => ExitCode::SUCCESS,
+                        Status::Interrupted => {
+                            eprintln!("interrupted: the outputs end at the last step taken");
+                            ExitCode::from(130)
+                        }
+                        Status::Stopped => {
+                            eprintln!("error: the run was stopped by a guard: {end}");
+                            ExitCode::from(3)
+                        }
+                    }
                 }
                 Err(e) => {
                     eprintln!("error: {e:#}");
@@ -220,13 +223,13 @@ fn compare(paths: &[PathBuf]) -> ExitCode {
     ExitCode::SUCCESS
 }
 
-/// Runs `scene` into its output folder; returns the summary, the status and the stop reason.
+/// Runs `scene` into its output folder; returns the summary and why the run stopped.
 fn run_scene(
     scene: &Scene,
     out: Option<PathBuf>,
     mcap: bool,
     stop: &AtomicBool,
-) -> anyhow::Result<(String, Status, String)> {
+) -> anyhow::Result<(String, StopReason)> {
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&scene.name));
     std::fs::create_dir_all(&dir)
         .with_context(|| format!("cannot create output folder {}", dir.display()))?;
@@ -247,5 +250,5 @@ fn run_scene(
             log.path().display()
         ));
     }
-    Ok((text, report.status, report.stop_reason))
+    Ok((text, report.stop))
 }

@@ -4,6 +4,10 @@
 //! removed when a run starts, so a killed run never leaves a file that looks finished. This
 //! module does no physics.
 
+pub mod compare;
+pub mod inspect;
+pub mod mcap;
+
 use std::fmt::Write as _;
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};
@@ -11,11 +15,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 
-use crate::compare::cell;
-use crate::guard::Status;
-use crate::rivals::{Case, rivals};
+use crate::output::compare::cell;
+use crate::run::stop::Status;
 use crate::run::{Observer, RunReport, Sample};
 use crate::scene::Scene;
+use crate::theory::rivals::{Case, rivals};
 
 /// Column names of `samples.csv`, in order.
 pub const CSV_COLUMNS: [&str; 56] = [
@@ -438,11 +442,12 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
         report.sim_time_s,
         report.wall_time_s,
         report.wall_time_rolling_s,
-        match report.status {
+        match report.stop.status() {
             Status::Completed => "completed",
+            Status::Interrupted => "INTERRUPTED",
             Status::Stopped => "STOPPED by a guard",
         },
-        report.stop_reason
+        report.stop
     );
     let _ = writeln!(o);
     if Case::of(s) == Case::Coil {
@@ -532,7 +537,7 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
             let _ = writeln!(
                 o,
                 "  {:<10} t = {:>9} s, r = {:.4e} m: {}",
-                crate::guard::label(l.kind),
+                crate::run::guard::label(l.kind),
                 secs(l.t_s),
                 l.r_m,
                 l.detail

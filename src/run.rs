@@ -2,20 +2,24 @@
 //! and feeds samples to observers; it builds the [`RunReport`]. It times only the model's
 //! step, and it never names a file format (outputs are [`Observer`]s).
 
+pub mod force_window;
+pub mod frame;
+pub mod guard;
+pub mod stop;
+
 use std::f64::consts::PI;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::force_window::{ForceWindow, WindowMean};
-use crate::forces::{ForceFn, force_reference};
-use crate::frame::{Event, Frame, GhostDisc, GhostSpiral};
-use crate::guard::{Applicability, Bounds, Guard, ReferenceLimit, Status};
 use crate::model::{BangEnd, EnergyLedger, Model, Observation, Phase};
-use crate::reference::{Continuum, ExactGeometry, ForceTorque, Params};
-use crate::rivals::{Rival, SpoolGeometry, rivals};
+use crate::run::force_window::{ForceWindow, WindowMean};
+use crate::run::frame::{Event, Frame, GhostDisc, GhostSpiral};
+use crate::run::guard::{Applicability, Bounds, Guard, ReferenceLimit};
+use crate::run::stop::StopReason;
 use crate::scene::Scene;
+use crate::theory::References;
 
 /// One row of output: the simulation and its references at the same instant.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -315,10 +319,8 @@ pub struct RunReport {
     pub wall_time_rolling_s: f64,
     /// Simulated time (s).
     pub sim_time_s: f64,
-    /// Whether the run ended as planned or a guard stopped it.
-    pub status: Status,
     /// Why the run stopped.
-    pub stop_reason: String,
+    pub stop: StopReason,
     /// The guards' bounds the run was held to.
     pub bounds: Bounds,
     /// Largest rise of the total energy above E0 over the run, over the energy scale
@@ -365,77 +367,6 @@ pub trait Observer {
     /// Called for every event, in time order (default: ignored).
     fn observe_event(&mut self, _event: &Event) -> anyhow::Result<()> {
         Ok(())
-    }
-}
-
-/// The analytic references of a scene.
-pub struct References {
-    /// Eq. (7).
-    pub continuum: Continuum,
-    /// Eq. (17).
-    pub force_torque: ForceTorque,
-    /// The exact-geometry model.
-    pub exact: ExactGeometry,
-    /// The scene's valid reference among the paper's rivals, if it has one.
-    pub valid: Option<Rival>,
-    /// The case's analytic constraint forces.
-    pub forces: Option<ForceFn>,
-    /// Spools: `l / r`, the angle of the whole tape (rad).
-    pub theta_per_fraction: Option<f64>,
-    /// The floor's friction coefficient for the exact-geometry model's force split
-    /// (infinite on a sticky floor); `None` on a fixed axis, which has no floor.
-    pub floor_grip: Option<f64>,
-}
-
-impl References {
-    /// Builds and tabulates the references for a scene, down to half the bang radius.
-    pub fn new(scene: &Scene) -> Self {
-        let p = params(scene);
-        let r_end = 0.5 * scene.stop.bang_radius_m;
-        Self {
-            continuum: Continuum::new(p, r_end),
-            force_torque: ForceTorque::new(p),
-            exact: exact_geometry(scene),
-            valid: rivals(scene).into_iter().find(|r| r.valid),
-            forces: force_reference(scene),
-            theta_per_fraction: (scene.tape.core_radius_m > 0.0).then(|| {
-                let sg = SpoolGeometry::of(scene);
-                sg.l_m / sg.r_m
-            }),
-            floor_grip: match (scene.fixed_axis, scene.sticky) {
-                (true, _) => None,
-                (false, true) => Some(f64::INFINITY),
-                (false, false) => Some(scene.friction),
-            },
-        }
-    }
-}
-
-/// The exact-geometry model of a scene, on its slope or sliding on a frictionless floor,
-/// tabulated to half the bang radius (a solid coil) or to 99.5 % laid (a spool).
-pub fn exact_geometry(scene: &Scene) -> ExactGeometry {
-    let (p, slope) = (params(scene), scene.slope_deg.to_radians());
-    let f_end = if scene.tape.core_radius_m > 0.0 {
-        0.995
-    } else {
-        1.0 - (0.5 * scene.stop.bang_radius_m / scene.tape.outer_radius_m).powi(2)
-    };
-    if scene.friction <= 0.0 {
-        ExactGeometry::frictionless(p, f_end)
-    } else {
-        ExactGeometry::to_fraction(p, slope, f_end)
-    }
-}
-
-/// The reference parameters of a scene.
-pub fn params(scene: &Scene) -> Params {
-    Params {
-        outer_radius_m: scene.tape.outer_radius_m,
-        thickness_m: scene.tape.thickness_m,
-        mass_kg: scene.tape.mass_kg,
-        core_radius_m: scene.tape.core_radius_m,
-        g_m_s2: scene.g_m_s2,
-        push_speed_m_s: scene.push_speed_m_s,
     }
 }
 
@@ -503,7 +434,6 @@ pub fn run_until(
         exact_curve: Vec::new(),
         eq7_curve: Vec::new(),
     };
-    let mut status = Status::Completed;
     let mut prev_logged = false;
 
     let mut wall = 0.0;
@@ -558,7 +488,7 @@ pub fn run_until(
         let health = model.health();
         let tripped = guard.check(&obs, &health);
         if let Some(reason) = tripped.as_ref()
-            && !crate::guard::is_finite(&obs, &health)
+            && !crate::run::guard::is_finite(&obs, &health)
         {
             // Keep the last finite step as the end of the run, logged: no NaN reaches a
             // table.
@@ -568,8 +498,7 @@ pub fn run_until(
                     o.observe_sample(&sample)?;
                 }
             }
-            stop_reason = reason.clone();
-            status = Status::Stopped;
+            stop_reason = StopReason::Guard(reason.clone());
             break;
         }
         max_gap = max_gap.max(obs.max_joint_gap_m);
@@ -621,7 +550,8 @@ pub fn run_until(
         let done = obs.phase == Phase::Done;
         let timed_out = obs.t_s >= scene.stop.max_time_s;
         let interrupted = stop.load(Ordering::Relaxed);
-        let last_step = done || timed_out || interrupted || tripped.is_some();
+        let ending = ending(scene, &obs, tripped, timed_out, interrupted);
+        let last_step = ending.is_some();
         if done {
             events.push(Event::BangEnd {
                 t_s: obs.t_s,
@@ -629,23 +559,11 @@ pub fn run_until(
                 dissipated_j: obs.ledger.bang_j,
                 ended_by: obs.bang.end.unwrap_or(BangEnd::Cap),
             });
-        } else if let Some(reason) = &tripped {
+        }
+        if let Some(message) = ending.as_ref().and_then(early_end_warning) {
             events.push(Event::Warning {
                 t_s: obs.t_s,
-                message: format!("stopped by a guard: {reason}"),
-            });
-        } else if timed_out {
-            events.push(Event::Warning {
-                t_s: obs.t_s,
-                message: format!(
-                    "stop.max_time_s = {} reached before the bang ended",
-                    scene.stop.max_time_s
-                ),
-            });
-        } else if interrupted {
-            events.push(Event::Warning {
-                t_s: obs.t_s,
-                message: "interrupted: the run stopped early".into(),
+                message,
             });
         }
         for event in &events {
@@ -680,33 +598,8 @@ pub fn run_until(
             next_frame += frame_interval * ((obs.t_s - next_frame) / frame_interval + 1.0).floor();
         }
         prev = Some(obs);
-        if let Some(reason) = tripped {
-            stop_reason = reason;
-            status = Status::Stopped;
-            break;
-        }
-        if done {
-            let moving = 100.0 * obs.kinetic_j / obs.bang.kinetic_in_j.max(f64::MIN_POSITIVE);
-            stop_reason = match obs.bang.end {
-                Some(BangEnd::Rest) => format!(
-                    "the final bang came to rest: {moving:.3} % of the kinetic energy it \
-                     received still moving (stop.rest_fraction = {})",
-                    scene.stop.rest_fraction
-                ),
-                _ => format!(
-                    "the final bang reached its cap, stop.bang_cap_s = {} s, with {moving:.3} % \
-                     of the kinetic energy it received still moving",
-                    scene.stop.bang_cap_s
-                ),
-            };
-            break;
-        }
-        if timed_out {
-            stop_reason = format!("stop.max_time_s = {} reached", scene.stop.max_time_s);
-            break;
-        }
-        if interrupted {
-            stop_reason = "interrupted".to_string();
+        if let Some(end) = ending {
+            stop_reason = end;
             break;
         }
     }
@@ -777,8 +670,7 @@ pub fn run_until(
         wall_time_s: wall,
         wall_time_rolling_s: wall_rolling.unwrap_or(wall),
         sim_time_s: last.t_s,
-        status,
-        stop_reason,
+        stop: stop_reason,
         bounds: guard.bounds,
         max_energy_rise_rel: guard.max_energy_rise_j / ledger.energy_scale_j,
         max_spin_rad_s: guard.max_spin_rad_s,
@@ -816,6 +708,54 @@ const BANG_SAMPLE_GROWTH: f64 = 1.1;
 
 /// Points per turn of the exact-geometry ghost spiral.
 const GHOST_POINTS_PER_TURN: u32 = 32;
+
+/// How this step ends the run, if it does: a guard first, then the bang's end, the time
+/// limit and an interruption.
+fn ending(
+    scene: &Scene,
+    obs: &Observation,
+    tripped: Option<crate::run::stop::GuardTrip>,
+    timed_out: bool,
+    interrupted: bool,
+) -> Option<StopReason> {
+    if let Some(trip) = tripped {
+        return Some(StopReason::Guard(trip));
+    }
+    if obs.phase == Phase::Done {
+        let still_moving = obs.kinetic_j / obs.bang.kinetic_in_j.max(f64::MIN_POSITIVE);
+        return Some(match obs.bang.end {
+            Some(BangEnd::Rest) => StopReason::AtRest {
+                t_s: obs.t_s,
+                still_moving,
+                rest_fraction: scene.stop.rest_fraction,
+            },
+            _ => StopReason::BangCap {
+                t_s: obs.t_s,
+                still_moving,
+                bang_cap_s: scene.stop.bang_cap_s,
+            },
+        });
+    }
+    if timed_out {
+        return Some(StopReason::MaxTime {
+            t_s: obs.t_s,
+            max_time_s: scene.stop.max_time_s,
+        });
+    }
+    interrupted.then_some(StopReason::Interrupted { t_s: obs.t_s })
+}
+
+/// The warning event of a run that ends before its bang does.
+fn early_end_warning(end: &StopReason) -> Option<String> {
+    match end {
+        StopReason::Guard(trip) => Some(format!("stopped by a guard: {trip}")),
+        StopReason::MaxTime { max_time_s, .. } => Some(format!(
+            "stop.max_time_s = {max_time_s} reached before the bang ended"
+        )),
+        StopReason::Interrupted { .. } => Some("interrupted: the run stopped early".into()),
+        StopReason::AtRest { .. } | StopReason::BangCap { .. } => None,
+    }
+}
 
 fn make_frame(
     scene: &Scene,

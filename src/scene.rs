@@ -7,6 +7,8 @@
 //! dependency order, and the first violation is reported as [`SceneError::Invalid`] naming
 //! the key with its section path, the offending value and the rule.
 
+pub mod overrides;
+
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
 

@@ -2,8 +2,8 @@
 //! closes, and its numerical part (joints and residual) stays small.
 
 use crate::support::run_kept;
-use uncoil::guard::Status;
 use uncoil::model::BangEnd;
+use uncoil::run::stop::Status;
 use uncoil::run::{RunReport, Sample};
 use uncoil::scene::Scene;
 
@@ -21,19 +21,19 @@ fn shipped(name: &str) -> Scene {
 /// Checks what every bang must show and returns the numerical share of what it dissipated.
 fn check_bang(name: &str, samples: &[Sample], report: &RunReport) -> f64 {
     assert_eq!(
-        report.status,
+        report.stop.status(),
         Status::Completed,
         "{name}: {}",
-        report.stop_reason
+        report.stop
     );
     let bang = report
         .bang
-        .unwrap_or_else(|| panic!("{name}: no bang: {}", report.stop_reason));
+        .unwrap_or_else(|| panic!("{name}: no bang: {}", report.stop));
     assert_eq!(
         bang.ended_by,
         Some(BangEnd::Rest),
         "{name}: {}",
-        report.stop_reason
+        report.stop
     );
     let moving = bang.still_moving_j / bang.kinetic_in_j;
     assert!(

@@ -10,10 +10,11 @@ use std::time::{Duration, Instant};
 
 use assert_cmd::Command;
 use predicates::prelude::*;
-use uncoil::check::verify_outputs;
-use uncoil::guard::{LimitKind, Status};
+use uncoil::run::guard::LimitKind;
+use uncoil::run::stop::Status;
 use uncoil::run::{RunReport, run};
 use uncoil::scene::Scene;
+use uncoil::study::check::verify_outputs;
 
 fn hard_path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -72,13 +73,18 @@ fn a_torn_chain_is_stopped_by_a_guard_with_everything_logged() {
     assert_eq!(verify_outputs(&out), Vec::<String>::new());
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    assert_eq!(report["status"], "stopped");
+    // The report names the guard with the value it measured and its bound.
+    let stop = &report["stop"];
+    assert_eq!(stop["reason"], "guard", "{stop}");
+    assert_eq!(stop["guard"], "joint-gap", "{stop}");
     assert!(
-        report["stop_reason"].as_str().unwrap().contains(
-            "above the bound 5.0000e-3 m (the larger of 1 b and 1 % of the outermost link)"
-        ),
-        "{}",
-        report["stop_reason"]
+        (stop["bound"].as_f64().unwrap() - 5.0e-3).abs() < 1e-12,
+        "{stop}"
+    );
+    assert!(stop["value"].as_f64().unwrap() > 5.0e-3, "{stop}");
+    assert!(
+        (stop["t_s"].as_f64().unwrap() - 0.074017).abs() < 1e-6,
+        "{stop}"
     );
     // The CSV ends at the step that tripped the guard, and holds the steps before it.
     let csv = std::fs::read_to_string(out.join("samples.csv")).unwrap();
@@ -108,7 +114,7 @@ fn a_frictionless_floor_slides_as_the_sliding_model_says() {
     // the centre of mass stays put (x ~ laid^2 / 2L); rolling would put it at the laid length.
     let scene = Scene::from_toml_str(&shortened("frictionless", 0.3), "frictionless").unwrap();
     let (samples, report) = crate::support::run_kept(&scene);
-    assert_eq!(report.status, Status::Completed, "{}", report.stop_reason);
+    assert_eq!(report.stop.status(), Status::Completed, "{}", report.stop);
     let k = kinds(&report);
     for kind in [LimitKind::Slip, LimitKind::Bunching, LimitKind::Skid] {
         assert!(!k.contains(&kind), "{:#?}", report.reference_limits);
@@ -137,7 +143,7 @@ fn zero_gravity_floats_on_the_floor_and_says_so() {
     let scene = Scene::from_toml_str(&shortened("zero-gravity", 0.1), "zero-gravity").unwrap();
     let (samples, report) = crate::support::run_kept(&scene);
     let max_normal_n = samples.iter().map(|s| s.normal_n.abs()).fold(0.0, f64::max);
-    assert_eq!(report.status, Status::Completed, "{}", report.stop_reason);
+    assert_eq!(report.stop.status(), Status::Completed, "{}", report.stop);
     assert!(
         kinds(&report).contains(&LimitKind::ExactModelHops),
         "{:#?}",
@@ -151,7 +157,7 @@ fn zero_gravity_floats_on_the_floor_and_says_so() {
             "kinetic energy {k} J from {k0} J"
         );
     }
-    assert!(report.max_energy_rise_rel <= uncoil::guard::ENERGY_RISE_TOLERANCE);
+    assert!(report.max_energy_rise_rel <= uncoil::run::guard::ENERGY_RISE_TOLERANCE);
 }
 
 #[test]
@@ -165,7 +171,7 @@ fn a_slippery_floor_run_writes_the_same_bytes_when_repeated() {
     for d in &dirs {
         let mut csv = uncoil::output::CsvObserver::new(d.path());
         let mut json = uncoil::output::ReportObserver::new(d.path());
-        let mut log = uncoil::mcap_log::McapObserver::new(d.path());
+        let mut log = uncoil::output::mcap::McapObserver::new(d.path());
         run(&scene, &mut [&mut csv, &mut json, &mut log]).unwrap();
         csvs.push(std::fs::read(d.path().join("samples.csv")).unwrap());
         mcaps.push(std::fs::read(d.path().join("run.mcap")).unwrap());
@@ -299,14 +305,15 @@ fn max_coil_spin(csv: &Path) -> f64 {
 #[ignore = "every hard case, a few minutes in release: cargo test --release -- --ignored"]
 fn every_hard_case_ends_with_a_stated_reason() {
     let out = tempfile::tempdir().unwrap();
-    let files =
-        uncoil::check::scene_files(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/hard"))
-            .unwrap();
+    let files = uncoil::study::check::scene_files(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/hard"),
+    )
+    .unwrap();
     let cases: Vec<_> = files
         .iter()
-        .map(|f| uncoil::check::check_scene(f, out.path()))
+        .map(|f| uncoil::study::check::check_scene(f, out.path()))
         .collect();
-    println!("{}", uncoil::check::table(&cases));
+    println!("{}", uncoil::study::check::table(&cases));
     let case = |name: &str| cases.iter().find(|c| c.name == name).unwrap();
     for c in &cases {
         assert!(
@@ -337,19 +344,16 @@ fn every_hard_case_ends_with_a_stated_reason() {
         "slope-up-10",
     ] {
         assert!(
-            matches!(case(name).outcome, uncoil::check::Outcome::Completed(_)),
+            case(name).outcome.word() == "completed",
             "{name}: {:?}",
             case(name).outcome
         );
     }
     assert!(matches!(
         case("one-link-per-turn").outcome,
-        uncoil::check::Outcome::Rejected(_)
+        uncoil::study::check::Outcome::Rejected(_)
     ));
-    assert!(matches!(
-        case("coarse-step").outcome,
-        uncoil::check::Outcome::Stopped(_)
-    ));
+    assert_eq!(case("coarse-step").outcome.word(), "stopped");
     let spin = max_coil_spin(&out.path().join("bang-1e4/samples.csv"));
     assert!(
         spin > 1e4,

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use assert_cmd::Command;
 use predicates::prelude::*;
 use serde_json::Value;
-use uncoil::mcap_log::{McapObserver, SCENE_UPDATE_SCHEMA};
+use uncoil::output::mcap::{McapObserver, SCENE_UPDATE_SCHEMA};
 use uncoil::output::{CSV_COLUMNS, CsvObserver};
 use uncoil::run::{RunReport, run};
 use uncoil::scene::Scene;
@@ -313,7 +313,7 @@ fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
     assert_eq!(md["tool"]["version"], env!("CARGO_PKG_VERSION"));
     assert_eq!(md["resolution"]["links_per_turn"], "32");
     assert_eq!(md["solver"]["iterations"], "4");
-    assert_eq!(md["run"]["stop_reason"], logged.report.stop_reason);
+    assert_eq!(md["run"]["stop_reason"], logged.report.stop.to_string());
     let e0: f64 = md["ledger"]["e0_j"].parse().unwrap();
     assert!((e0 - logged.report.ledger.e0_j).abs() <= 1e-12 * e0);
 }
@@ -344,11 +344,11 @@ fn inspect_prints_channels_counts_time_range_metadata_and_ledger() {
 fn inspect_reads_a_cut_off_file_as_far_as_its_data_goes() {
     // A file cut in half, as a crash leaves it: no summary, but the chunks before the cut.
     let bytes = std::fs::read(logged().dir.join("run.mcap")).unwrap();
-    let whole = uncoil::inspect::inventory(&bytes).unwrap();
-    let half = uncoil::inspect::inventory(&bytes[..bytes.len() / 2]).unwrap();
+    let whole = uncoil::output::inspect::inventory(&bytes).unwrap();
+    let half = uncoil::output::inspect::inventory(&bytes[..bytes.len() / 2]).unwrap();
     assert!(whole.finished && !half.finished);
     assert!(half.read_error.is_some());
-    let count = |inv: &uncoil::inspect::Inventory| -> u64 {
+    let count = |inv: &uncoil::output::inspect::Inventory| -> u64 {
         inv.channels.values().map(|c| c.messages).sum()
     };
     assert!(
@@ -465,5 +465,5 @@ fn ctrl_c_stops_the_run_and_leaves_a_finished_log() {
     assert!(t_end < ns(2.0), "stopped at {t_end} ns");
     let report: Value =
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
-    assert_eq!(report["stop_reason"], "interrupted");
+    assert_eq!(report["stop"]["reason"], "interrupted");
 }

@@ -43,14 +43,14 @@ fn yoga_mat_follows_the_exact_geometry_model_and_keeps_its_energy_for_the_bang()
     assert!(report.ledger.kinetic_into_bang_j > 0.9 * report.ledger.mgr_j);
     // No guard trips, and the rolling contact holds: the references apply until the last
     // turns (r < 3b, the exact model's hop), never through slip, bunching or skid.
-    assert_eq!(report.status, uncoil::guard::Status::Completed);
+    assert_eq!(report.stop.status(), uncoil::run::stop::Status::Completed);
     for l in &report.reference_limits {
         assert!(
             matches!(
                 l.kind,
-                uncoil::guard::LimitKind::FewTurns
-                    | uncoil::guard::LimitKind::ExactModelHops
-                    | uncoil::guard::LimitKind::LiftOff
+                uncoil::run::guard::LimitKind::FewTurns
+                    | uncoil::run::guard::LimitKind::ExactModelHops
+                    | uncoil::run::guard::LimitKind::LiftOff
             ) && l.r_m < 3.0 * yoga_mat().tape.thickness_m + 1e-9,
             "yoga mat: {l:?}"
         );

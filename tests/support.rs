@@ -1,6 +1,6 @@
 //! Helpers shared by the test modules.
 
-use uncoil::compare::SampleLog;
+use uncoil::output::compare::SampleLog;
 use uncoil::run::{RunReport, Sample, run};
 use uncoil::scene::Scene;
 

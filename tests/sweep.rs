@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 use assert_cmd::Command;
 use predicates::prelude::*;
 
-use uncoil::sweep::SweepTable;
+use uncoil::study::analysis::{Reference, SweepAnalysis};
+use uncoil::study::sweep::{RowStatus, SweepTable};
 
 fn yoga() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/yoga-mat.toml")
@@ -69,7 +70,7 @@ fn sweep_shards_merge_and_report() {
     sweep(&full, &["--quiet"])
         .success()
         .stdout(predicate::str::contains(
-            "2 runs (0 failed) of 2 combinations",
+            "2 runs (0 failed, 0 stopped by a guard) of 2 combinations",
         ));
     let t = SweepTable::read(&full.join("sweep.csv")).unwrap();
     assert_eq!(
@@ -120,7 +121,7 @@ fn sweep_shards_merge_and_report() {
     sweep(&shards, &["--quiet", "--shard", "1/2"])
         .success()
         .stdout(predicate::str::contains(
-            "1 runs (0 failed) of 2 combinations",
+            "1 runs (0 failed, 0 stopped by a guard) of 2 combinations",
         ));
     sweep(&shards, &["--quiet", "--shard", "2/2"]).success();
     let s1 = shards.join("sweep.1-of-2.csv");
@@ -176,6 +177,50 @@ fn sweep_shards_merge_and_report() {
             .unwrap()
             .contains("<svg")
     );
+}
+
+/// A run a guard stops is recorded as stopped, the sweep exits 3 as `uncoil run` does, and
+/// the report leaves the run out of its fits and lists it.
+#[test]
+fn a_guard_stop_is_recorded_as_stopped_and_left_out_of_the_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("coarse");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/hard/coarse-step.toml");
+    uncoil()
+        .arg("sweep")
+        .arg(&scene)
+        .args(["--vary", "solver.iterations=1", "--jobs", "1", "--quiet"])
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(3)
+        .stdout(predicate::str::contains(
+            "1 runs (0 failed, 1 stopped by a guard) of 1 combinations",
+        ));
+    let t = SweepTable::read(&out.join("sweep.csv")).unwrap();
+    let status = cell(&t, 0, "status");
+    assert!(
+        status.starts_with("stopped: joints separating at t = 0.074017 s"),
+        "{status}"
+    );
+    assert_eq!(
+        status.parse::<RowStatus>().unwrap(),
+        RowStatus::Stopped(status["stopped: ".len()..].to_owned())
+    );
+    let analysis = SweepAnalysis::new(t, Reference::Exact, "wall_s", &[]).unwrap();
+    assert_eq!(analysis.fits, [false]);
+    assert!(analysis.front.is_empty(), "{:?}", analysis.front);
+    uncoil()
+        .arg("sweep-report")
+        .arg(out.join("sweep.csv"))
+        .assert()
+        .success()
+        .stdout(predicate::str::contains(
+            "Left out of the fits, the front and the target",
+        ))
+        .stdout(predicate::str::contains(
+            "- #0 solver.iterations=1: stopped: joints separating",
+        ));
 }
 
 #[test]

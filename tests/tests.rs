@@ -4,6 +4,7 @@ mod bang;
 mod cli;
 mod fuzz;
 mod hard;
+mod layers;
 mod mcap;
 mod sim;
 mod support;

@@ -2,12 +2,12 @@
 //! ledger, and what the paradox table shows (the competing equations that it does not follow).
 
 use crate::support::run_kept;
-use uncoil::compare::{SPIN_TURNS, sim_sign_change, spin_at_theta, window_mean};
-use uncoil::forces::{force_reference, sign_change_fraction};
-use uncoil::guard::Status;
-use uncoil::rivals::{Rival, rivals, spool_spins};
+use uncoil::output::compare::{SPIN_TURNS, sim_sign_change, spin_at_theta, window_mean};
+use uncoil::run::stop::Status;
 use uncoil::run::{RunReport, Sample};
 use uncoil::scene::Scene;
+use uncoil::theory::forces::{force_reference, sign_change_fraction};
+use uncoil::theory::rivals::{Rival, rivals, spool_spins};
 
 fn scene(name: &str) -> Scene {
     Scene::from_file(format!("{}/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap()
@@ -34,7 +34,7 @@ fn errors(report: &RunReport, r: &Rival) -> Vec<(String, f64)> {
 /// The simulation's spin against an energy integral `theta'(theta)` at the turns of
 /// [`SPIN_TURNS`] up to 90 % laid: `(turns, spin_ref / spin_sim - 1)`.
 fn spin_errors(s: &Scene, samples: &[Sample], spin: &dyn Fn(f64) -> f64) -> Vec<(f64, f64)> {
-    let sg = uncoil::rivals::SpoolGeometry::of(s);
+    let sg = uncoil::theory::rivals::SpoolGeometry::of(s);
     SPIN_TURNS
         .iter()
         .map(|&k| (k, 2.0 * std::f64::consts::PI * k))
@@ -334,7 +334,7 @@ fn frictionless_spool_follows_the_sliding_spiral_and_pushes_the_laid_tape_flat()
             assert!(e > 0.03, "eq. 104 after {k} turns: {:+.2} %", 100.0 * e);
         }
     }
-    let l = uncoil::rivals::SpoolGeometry::of(&s).l_m;
+    let l = uncoil::theory::rivals::SpoolGeometry::of(&s).l_m;
     // Measured: at most 1.6 mm off; the contact line travels 0.8 m by 90 % laid, and a
     // bunched-up tape would leave it near 0. Allow 0.2 % of l.
     let worst = worst_x(&samples, |u| 0.5 * l * u * u);
@@ -375,7 +375,7 @@ fn frictionless_coil_follows_the_sliding_spiral_and_keeps_its_centre_of_mass() {
     assert_ledger_closes(&samples);
     // The bang comes to rest: the floor conserves the zero horizontal momentum, so the
     // impacts can take everything (measured 97 % of what it dissipated).
-    assert_eq!(report.status, Status::Completed, "{}", report.stop_reason);
+    assert_eq!(report.stop.status(), Status::Completed, "{}", report.stop);
     let l = &report.ledger;
     assert!(l.dissipated_by_bang_j > 0.5 * l.e0_j, "{l:?}");
     // A sliding model has no rolling contact-line speed to set beside the peak: the report
@@ -459,8 +459,8 @@ fn vertical_tape_follows_eq115_and_leaves_at_its_exit_speed() {
     assert!(lost < 0.001, "lost {:.3} % of K by f = 0.9", 100.0 * lost);
     // The tape speed r theta' follows eq. (115)'s integral; at theta = 2 pi it would be
     // sqrt(2 pi g r + r^2 theta0'^2) (B17). Checked where 95 % hangs.
-    let sg = uncoil::rivals::SpoolGeometry::of(&s);
-    let spin = uncoil::rivals::vertical_spin(sg.r_m, s.g_m_s2, sg.spin0_rad_s);
+    let sg = uncoil::theory::rivals::SpoolGeometry::of(&s);
+    let spin = uncoil::theory::rivals::vertical_spin(sg.r_m, s.g_m_s2, sg.spin0_rad_s);
     let at = samples
         .iter()
         .find(|x| x.laid_fraction >= 0.95)

@@ -8,8 +8,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 
-use crate::guard::{Status, label};
 use crate::output::{CSV_COLUMNS, CsvObserver, ReportObserver};
+use crate::run::guard::label;
+use crate::run::stop::{Status, StopReason};
 use crate::run::{Observer, RunReport, run};
 use crate::scene::Scene;
 
@@ -18,10 +19,8 @@ use crate::scene::Scene;
 pub enum Outcome {
     /// The scene was rejected when loaded, with this message.
     Rejected(String),
-    /// The run ended as planned, for this reason.
-    Completed(String),
-    /// A guard stopped the run, for this reason.
-    Stopped(String),
+    /// The run ended, for this reason (as planned, interrupted, or stopped by a guard).
+    Ended(StopReason),
     /// The run failed (an output could not be written), with this error.
     Failed(String),
 }
@@ -31,17 +30,20 @@ impl Outcome {
     pub fn word(&self) -> &'static str {
         match self {
             Outcome::Rejected(_) => "rejected",
-            Outcome::Completed(_) => "completed",
-            Outcome::Stopped(_) => "stopped",
+            Outcome::Ended(stop) => match stop.status() {
+                Status::Completed => "completed",
+                Status::Interrupted => "interrupted",
+                Status::Stopped => "stopped",
+            },
             Outcome::Failed(_) => "FAILED",
         }
     }
 
     /// The stated reason or message.
-    pub fn reason(&self) -> &str {
+    pub fn reason(&self) -> String {
         match self {
-            Outcome::Rejected(s) | Outcome::Completed(s) | Outcome::Stopped(s) => s,
-            Outcome::Failed(s) => s,
+            Outcome::Rejected(s) | Outcome::Failed(s) => s.clone(),
+            Outcome::Ended(stop) => stop.to_string(),
         }
     }
 }
@@ -100,10 +102,7 @@ pub fn check_scene(path: &Path, out_root: &Path) -> Case {
     match run_into(&scene, &dir) {
         Ok(report) => Case {
             name,
-            outcome: match report.status {
-                Status::Completed => Outcome::Completed(report.stop_reason.clone()),
-                Status::Stopped => Outcome::Stopped(report.stop_reason.clone()),
-            },
+            outcome: Outcome::Ended(report.stop.clone()),
             output_problems: verify_outputs(&dir),
             report: Some(report),
         },

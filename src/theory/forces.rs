@@ -9,10 +9,10 @@
 
 use std::f64::consts::PI;
 
-use crate::reference::Continuum;
-use crate::rivals::{Case, SpoolGeometry, single_turn_spin, slope_energy_rdot, spool_rate};
-use crate::run::params;
 use crate::scene::Scene;
+use crate::theory::params;
+use crate::theory::reference::Continuum;
+use crate::theory::rivals::{Case, SpoolGeometry, single_turn_spin, slope_energy_rdot, spool_rate};
 
 /// `(N_tot, F_tot)` in N at a laid fraction, `None` where the reference does not exist.
 pub type ForceFn = Box<dyn Fn(f64) -> Option<(f64, f64)>>;

@@ -5,10 +5,10 @@
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 
-use crate::forces::{force_reference, sign_change_fraction};
-use crate::rivals::{Case, Rival, SpoolGeometry, rivals, spool_spins};
 use crate::run::{Observer, RunReport, Sample};
 use crate::scene::Scene;
+use crate::theory::forces::{force_reference, sign_change_fraction};
+use crate::theory::rivals::{Case, Rival, SpoolGeometry, rivals, spool_spins};
 
 /// Keeps the samples of a run, for the force table.
 #[derive(Debug, Default)]

@@ -1,6 +1,6 @@
 //! `run.mcap`: every run as an MCAP log that Foxglove (or Lichtblick) opens as it is. It
 //! turns samples, frames and events into JSON messages stamped with simulation time; it does
-//! no physics and reads nothing back (see [`crate::inspect`]).
+//! no physics and reads nothing back (see [`crate::output::inspect`]).
 //!
 //! Channels, all JSON-encoded with a `jsonschema` schema:
 //! - `/scene`: `foxglove.SceneUpdate`, schema text vendored unchanged from the npm package
@@ -29,7 +29,7 @@
 //! `run.mcap` is always complete. Messages go into zstd-compressed chunks of about 1 MiB;
 //! the writer finishes a chunk by seeking back to its header, which flushes it to the file,
 //! so a crash (even a `kill -9`) leaves every completed chunk readable in the `.partial`
-//! file (`mcap recover`, or [`crate::inspect`], which reads as far as the data goes).
+//! file (`mcap recover`, or [`crate::output::inspect`], which reads as far as the data goes).
 
 use std::collections::BTreeMap;
 use std::fs::{self, File};
@@ -41,18 +41,19 @@ use mcap::records::{MessageHeader, Metadata};
 use mcap::{Compression, WriteOptions, Writer};
 use serde::Serialize;
 
-use crate::frame::{Event, Frame};
+use crate::run::frame::{Event, Frame};
 use crate::run::{Observer, RunReport, Sample};
 use crate::scene::Scene;
 
 /// The official `foxglove.SceneUpdate` JSON schema (npm `@foxglove/schemas` 2.1.0).
-pub const SCENE_UPDATE_SCHEMA: &str = include_str!("../schemas/foxglove/SceneUpdate.json");
+pub const SCENE_UPDATE_SCHEMA: &str = include_str!("../../schemas/foxglove/SceneUpdate.json");
 /// The official `foxglove.FrameTransforms` JSON schema (npm `@foxglove/schemas` 2.1.0).
-pub const FRAME_TRANSFORMS_SCHEMA: &str = include_str!("../schemas/foxglove/FrameTransforms.json");
+pub const FRAME_TRANSFORMS_SCHEMA: &str =
+    include_str!("../../schemas/foxglove/FrameTransforms.json");
 /// The JSON schema of `/state` messages.
-pub const STATE_SCHEMA: &str = include_str!("../schemas/uncoil.State.json");
+pub const STATE_SCHEMA: &str = include_str!("../../schemas/uncoil.State.json");
 /// The JSON schema of `/events` messages.
-pub const EVENT_SCHEMA: &str = include_str!("../schemas/uncoil.Event.json");
+pub const EVENT_SCHEMA: &str = include_str!("../../schemas/uncoil.Event.json");
 
 /// Topic of the scene drawings.
 pub const SCENE_TOPIC: &str = "/scene";
@@ -307,7 +308,7 @@ impl Observer for McapObserver {
         open.writer.write_metadata(&metadata(
             "run",
             &[
-                ("stop_reason", report.stop_reason.clone()),
+                ("stop_reason", report.stop.to_string()),
                 ("links", report.links.to_string()),
                 ("steps", report.steps.to_string()),
                 ("sim_time_s", report.sim_time_s.to_string()),

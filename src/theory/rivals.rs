@@ -11,10 +11,10 @@ use std::f64::consts::PI;
 
 use serde::Serialize;
 
-use crate::reference::{Continuum, ForceTorque, Params, Trajectory};
-use crate::run::{exact_geometry, params};
 use crate::scene::Scene;
 use crate::spiral::Spiral;
+use crate::theory::reference::{Continuum, ForceTorque, Params, Trajectory};
+use crate::theory::{exact_geometry, params};
 
 /// Which of the paper's systems a scene is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]

@@ -9,9 +9,10 @@
 use serde::Serialize;
 
 use crate::model::{Health, Observation, Phase};
-use crate::reference::ExactGeometry;
+use crate::run::stop::{GuardKind, GuardTrip};
 use crate::scene::Scene;
 use crate::spiral::Spiral;
+use crate::theory::reference::ExactGeometry;
 
 /// A run stops when its total energy rises above E0 by this fraction of the scene's energy
 /// scale, the largest of |E0|, M g R and, on a slope, M g sin(slope) L (what the whole tape
@@ -48,16 +49,6 @@ pub const CONSECUTIVE_STEPS: u32 = 20;
 /// Eq. (7) treats the coil as a continuum, with an error O(b/r): it is flagged once the
 /// coil's outer radius is below this many thicknesses.
 pub const CONTINUUM_RADIUS_PER_THICKNESS: f64 = 3.0;
-
-/// Whether a run ended as planned.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Status {
-    /// The final bang ended (at rest or at its cap), or `stop.max_time_s` was reached.
-    Completed,
-    /// A guard stopped the run; `stop_reason` says which and why.
-    Stopped,
-}
 
 /// The guards' bounds for one scene, in the scene's units.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -139,56 +130,40 @@ impl Guard {
 
     /// The reason to stop after this step, if any. A non-finite state is reported before
     /// anything else (the other checks would compare NaN).
-    pub fn check(&mut self, obs: &Observation, health: &Health) -> Option<String> {
+    pub fn check(&mut self, obs: &Observation, health: &Health) -> Option<GuardTrip> {
+        let trip = |guard, value, bound| {
+            Some(GuardTrip {
+                guard,
+                t_s: obs.t_s,
+                value,
+                bound,
+            })
+        };
         if let Some(name) = non_finite(obs, health) {
-            return Some(format!(
-                "blow-up at t = {:.6} s: {name} is not finite",
-                obs.t_s
-            ));
+            return trip(GuardKind::NonFinite(name.to_owned()), 0.0, 0.0);
         }
         self.max_spin_rad_s = self.max_spin_rad_s.max(health.max_spin_rad_s);
         let b = &self.bounds;
         let rise = obs.kinetic_j + obs.potential_j - self.e0_j;
         self.max_energy_rise_j = self.max_energy_rise_j.max(rise);
         if rise > b.energy_rise_j {
-            return Some(format!(
-                "energy rising at t = {:.6} s: E - E0 = {rise:.4e} J, above the bound {:.4e} J \
-                 ({} % of the energy scale: the largest of |E0|, M g R, M g L sin(slope))",
-                obs.t_s,
-                b.energy_rise_j,
-                100.0 * ENERGY_RISE_TOLERANCE
-            ));
+            return trip(GuardKind::EnergyRise, rise, b.energy_rise_j);
         }
         if obs.max_joint_gap_m > b.joint_gap_m {
-            return Some(format!(
-                "joints separating at t = {:.6} s: gap {:.4e} m, above the bound {:.4e} m \
-                 (the larger of {JOINT_GAP_PER_THICKNESS} b and {} % of the outermost link)",
-                obs.t_s,
-                obs.max_joint_gap_m,
-                b.joint_gap_m,
-                100.0 * JOINT_GAP_PER_LINK
-            ));
+            return trip(GuardKind::JointGap, obs.max_joint_gap_m, b.joint_gap_m);
         }
         if obs.max_penetration_m > b.penetration_m {
-            return Some(format!(
-                "floor penetration at t = {:.6} s: {:.4e} m, above the bound {:.4e} m \
-                 ({PENETRATION_PER_RADIUS} R)",
-                obs.t_s, obs.max_penetration_m, b.penetration_m
-            ));
+            return trip(
+                GuardKind::Penetration,
+                obs.max_penetration_m,
+                b.penetration_m,
+            );
         }
         if b.floor_in_reach && -health.lowest_m > b.penetration_m {
-            return Some(format!(
-                "a body fell through the floor at t = {:.6} s: centre of mass at y = {:.4e} m, \
-                 below the bound -{:.4e} m ({PENETRATION_PER_RADIUS} R)",
-                obs.t_s, health.lowest_m, b.penetration_m
-            ));
+            return trip(GuardKind::FellThrough, health.lowest_m, b.penetration_m);
         }
         if health.farthest_m > b.world_radius_m {
-            return Some(format!(
-                "a body left the world at t = {:.6} s: {:.4e} m from the start, beyond the \
-                 bound {:.4e} m",
-                obs.t_s, health.farthest_m, b.world_radius_m
-            ));
+            return trip(GuardKind::LeftWorld, health.farthest_m, b.world_radius_m);
         }
         None
     }
@@ -584,7 +559,7 @@ mod tests {
         for (want, obs, health) in cases {
             let got = Guard::new(&scene, 1.0).check(&obs, &health);
             assert!(
-                got.as_deref().is_some_and(|r| r.contains(want)),
+                got.as_ref().is_some_and(|r| r.to_string().contains(want)),
                 "expected `{want}`, got {got:?}"
             );
         }
@@ -593,7 +568,7 @@ mod tests {
     #[test]
     fn limits_need_consecutive_steps_and_are_noted_once() {
         let scene = yoga();
-        let exact = crate::run::exact_geometry(&scene);
+        let exact = crate::theory::exact_geometry(&scene);
         let mut a = Applicability::new(&scene, &exact);
         let slipping = Health {
             slip_m_s: Some(0.1),
@@ -638,7 +613,7 @@ mod tests {
     #[test]
     fn a_contact_line_off_the_exact_model_s_speed_is_noted() {
         let scene = yoga();
-        let exact = crate::run::exact_geometry(&scene);
+        let exact = crate::theory::exact_geometry(&scene);
         let v = exact.xdot_at_psi(step(1.0).psi_low);
         let mut a = Applicability::new(&scene, &exact);
         // 4 % off: within the bound.
@@ -664,7 +639,7 @@ mod tests {
             "sliding",
         )
         .expect("valid scene");
-        let exact = crate::run::exact_geometry(&scene);
+        let exact = crate::theory::exact_geometry(&scene);
         let psi = exact.psi_at_fraction(0.5);
         let x = exact.sliding_contact_x(psi).expect("sliding");
         let laid = exact.spiral().arc(psi, exact.spiral().psi_out);

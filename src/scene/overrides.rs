@@ -181,7 +181,7 @@ fn list(overrides: &[Override]) -> String {
 mod tests {
     use super::*;
 
-    const YOGA: &str = include_str!("../scenes/yoga-mat.toml");
+    const YOGA: &str = include_str!("../../scenes/yoga-mat.toml");
 
     fn ov(arg: &str) -> Override {
         arg.parse().unwrap()

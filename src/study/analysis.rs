@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use crate::sweep::{STATUS_COLUMN, SweepTable};
+use crate::study::sweep::{RowStatus, STATUS_COLUMN, SweepTable};
 
 /// A least-squares fit of `log10 y = order * log10 x + log10_c`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -172,6 +172,9 @@ pub struct Study {
 pub struct SweepAnalysis {
     /// The table.
     pub table: SweepTable,
+    /// Whether each row enters the fits, the front and the target ([`RowStatus::fits`]):
+    /// runs that failed, were interrupted or were stopped by a guard are left out.
+    pub fits: Vec<bool>,
     /// The error used.
     pub reference: Reference,
     /// Wall-time column used as the cost (`wall_rolling_s` or `wall_s`).
@@ -233,6 +236,19 @@ pub struct BangStudy {
     pub fit: Vec<Option<PowerFit>>,
 }
 
+/// Whether each row of a sweep table enters the fits ([`RowStatus::fits`]); `None` if the
+/// table has no status column. A status that does not parse is left out.
+pub fn fitting_rows(table: &SweepTable) -> Option<Vec<bool>> {
+    let c = table.column(STATUS_COLUMN)?;
+    Some(
+        table
+            .rows
+            .iter()
+            .map(|r| r[c].parse::<RowStatus>().is_ok_and(|s| s.fits()))
+            .collect(),
+    )
+}
+
 /// The bang studies of a sweep with bang columns: one per numeric varied key and setting
 /// of the other keys, the `repeats` pooled as the ensemble, over the runs whose bang took
 /// time. Empty if the sweep has no bang columns or no key takes two settings.
@@ -250,6 +266,7 @@ pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
         return Vec::new();
     };
     let rows = table.rows.len();
+    let fits = fitting_rows(table).unwrap_or_else(|| vec![true; rows]);
     let values: Vec<Vec<f64>> = BANG_OBSERVABLES
         .iter()
         .map(|(_, c)| match *c {
@@ -272,7 +289,7 @@ pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
         // Group the runs with a bang by the other (non-repeat) keys, then by this key.
         let mut groups: BTreeMap<String, BTreeMap<u64, Vec<usize>>> = BTreeMap::new();
         // A bang given no time (stop.bang_cap_s = 0) has nothing to say.
-        for r in (0..rows).filter(|&r| kin[r].is_finite() && duration[r] > 0.0) {
+        for r in (0..rows).filter(|&r| fits[r] && kin[r].is_finite() && duration[r] > 0.0) {
             let g = keys
                 .iter()
                 .filter(|k| *k != key && !repeats.contains(k))
@@ -452,14 +469,8 @@ impl SweepAnalysis {
         let links = col("links")?;
         let wall = col("wall_s")?;
         let steps = col("steps")?;
-        let status_col = table
-            .column(STATUS_COLUMN)
+        let ok = fitting_rows(&table)
             .ok_or_else(|| anyhow::anyhow!("the sweep has no `{STATUS_COLUMN}` column"))?;
-        let ok: Vec<bool> = table
-            .rows
-            .iter()
-            .map(|r| !r[status_col].starts_with("failed"))
-            .collect();
         let keys = table.varied_keys();
         let series_keys: Vec<String> = keys
             .iter()
@@ -479,7 +490,13 @@ impl SweepAnalysis {
                     .join(" ")
             })
             .collect();
-        let front = pareto_front(&cost, &err);
+        let only_fitting = |v: &[f64]| -> Vec<f64> {
+            v.iter()
+                .zip(&ok)
+                .map(|(&x, &fits)| if fits { x } else { f64::NAN })
+                .collect()
+        };
+        let front = pareto_front(&only_fitting(&cost), &only_fitting(&err));
         // Milestone errors against the exact model: t_sim = t_geo (1 + e).
         let milestone_errs: Vec<Vec<f64>> = table
             .header
@@ -558,6 +575,7 @@ impl SweepAnalysis {
         let bang = bang_studies(&table, repeats);
         Ok(Self {
             table,
+            fits: ok,
             bang,
             reference,
             cost_column: cost_column.to_owned(),
@@ -571,6 +589,40 @@ impl SweepAnalysis {
         })
     }
 
+    /// The runs left out of the fits, the front and the target, with their status (empty
+    /// when every run counts).
+    fn left_out(&self) -> String {
+        let t = &self.table;
+        let (Some(status), Some(index)) = (t.column(STATUS_COLUMN), t.column("index")) else {
+            return String::new();
+        };
+        let keys = t.varied_keys();
+        let mut o = String::new();
+        for r in (0..t.rows.len()).filter(|&r| !self.fits[r]) {
+            if o.is_empty() {
+                o.push_str(
+                    "Left out of the fits, the front and the target (failed, interrupted or \
+                     stopped by a guard):\n\n",
+                );
+            }
+            let settings: Vec<String> = keys
+                .iter()
+                .filter_map(|k| t.column(k).map(|c| format!("{k}={}", t.rows[r][c])))
+                .collect();
+            let _ = writeln!(
+                o,
+                "- #{} {}: {}",
+                t.rows[r][index],
+                settings.join(" "),
+                t.rows[r][status]
+            );
+        }
+        if !o.is_empty() {
+            o.push('\n');
+        }
+        o
+    }
+
     /// The runs that meet the target (error and cost at most the target's), cheapest
     /// first; empty without a target.
     pub fn meeting_target(&self) -> Vec<usize> {
@@ -578,7 +630,7 @@ impl SweepAnalysis {
             return Vec::new();
         };
         let mut v: Vec<usize> = (0..self.cost.len())
-            .filter(|&i| self.err[i] <= e && self.cost[i] <= c)
+            .filter(|&i| self.fits[i] && self.err[i] <= e && self.cost[i] <= c)
             .collect();
         v.sort_by(|&a, &b| self.cost[a].total_cmp(&self.cost[b]));
         v
@@ -655,6 +707,7 @@ impl SweepAnalysis {
                 ", final bang included"
             }
         );
+        o.push_str(&self.left_out());
         if !self.studies.is_empty() {
             let _ = writeln!(o, "## Convergence\n");
             let _ = writeln!(

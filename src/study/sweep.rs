@@ -3,7 +3,7 @@
 //! (`K/N`) for batch schedulers and the merge of shard files. It does no physics and draws
 //! nothing: each run is [`run`] on a scene built by
 //! [`scene_with_overrides`]; reports are in
-//! [`analysis`](crate::analysis) and [`plot`](crate::plot).
+//! [`analysis`](crate::study::analysis) and [`plot`](crate::study::plot).
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -18,18 +18,92 @@ use std::time::Instant;
 use anyhow::Context as _;
 use rayon::prelude::*;
 
-use crate::guard::LimitKind;
 use crate::output::write_atomic;
-use crate::overrides::{Override, OverrideSyntaxError, check_key, scene_with_overrides};
+use crate::run::guard::LimitKind;
+use crate::run::stop::StopReason;
 use crate::run::{RunReport, milestone_radii, run};
+use crate::scene::overrides::{Override, OverrideSyntaxError, check_key, scene_with_overrides};
 use crate::scene::{Scene, SceneError};
 
 /// The first column of `sweep.csv`: the combination's place in the full grid (0-based,
 /// last `--vary` key fastest), the same in every shard.
 pub const INDEX_COLUMN: &str = "index";
-/// The last column of `sweep.csv`: `ok` (the bang settled), `max_time` (stopped by
-/// `stop.max_time_s`) or `failed: <reason>`.
+/// The last column of `sweep.csv`, a [`RowStatus`].
 pub const STATUS_COLUMN: &str = "status";
+
+/// How a sweep's run ended, as its `status` cell says it: `ok` (the bang ended),
+/// `max_time` (`stop.max_time_s` reached first), `interrupted`, `stopped: <guard>` (a
+/// guard stopped it, with the guard's value and bound) or `failed: <error>`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum RowStatus {
+    /// The final bang ended, at rest or at its cap.
+    Ok,
+    /// `stop.max_time_s` was reached before the bang ended.
+    MaxTime,
+    /// The run was asked to stop.
+    Interrupted,
+    /// A guard stopped the run; what it said.
+    Stopped(String),
+    /// The run failed or panicked; its error.
+    Failed(String),
+}
+
+impl RowStatus {
+    /// The status of a run that ended.
+    pub fn of(stop: &StopReason) -> Self {
+        match stop {
+            StopReason::AtRest { .. } | StopReason::BangCap { .. } => Self::Ok,
+            StopReason::MaxTime { .. } => Self::MaxTime,
+            StopReason::Interrupted { .. } => Self::Interrupted,
+            StopReason::Guard(trip) => Self::Stopped(one_line(&trip.to_string())),
+        }
+    }
+
+    /// Whether the run's figures enter a sweep's fits: it ran to its bang's end or to its
+    /// time limit, unstopped.
+    pub fn fits(&self) -> bool {
+        matches!(self, Self::Ok | Self::MaxTime)
+    }
+}
+
+fn one_line(text: &str) -> String {
+    text.replace(['\n', '\r'], " ")
+}
+
+impl std::fmt::Display for RowStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Ok => f.write_str("ok"),
+            Self::MaxTime => f.write_str("max_time"),
+            Self::Interrupted => f.write_str("interrupted"),
+            Self::Stopped(why) => write!(f, "stopped: {why}"),
+            Self::Failed(why) => write!(f, "failed: {why}"),
+        }
+    }
+}
+
+impl FromStr for RowStatus {
+    type Err = String;
+
+    fn from_str(cell: &str) -> Result<Self, String> {
+        match cell {
+            "ok" => Ok(Self::Ok),
+            "max_time" => Ok(Self::MaxTime),
+            "interrupted" => Ok(Self::Interrupted),
+            _ => {
+                if let Some(why) = cell.strip_prefix("stopped: ") {
+                    Ok(Self::Stopped(why.to_owned()))
+                } else if let Some(why) = cell.strip_prefix("failed: ") {
+                    Ok(Self::Failed(why.to_owned()))
+                } else {
+                    Err(format!(
+                        "status `{cell}`: expected ok, max_time, interrupted, stopped: ... or failed: ..."
+                    ))
+                }
+            }
+        }
+    }
+}
 
 /// One `--vary KEY=V1,V2,...`: a key and the values it takes.
 #[derive(Debug, Clone, PartialEq)]
@@ -310,12 +384,7 @@ pub fn result_cells(report: &RunReport, jobs: usize) -> Vec<String> {
         c.push(opt(r));
     }
     c.extend(bang_cells(report));
-    let status = if l.bang_time_s.is_some() && report.sim_time_s < report.scene.stop.max_time_s {
-        "ok"
-    } else {
-        "max_time"
-    };
-    c.push(status.to_owned());
+    c.push(RowStatus::of(&report.stop).to_string());
     c
 }
 
@@ -528,6 +597,8 @@ pub struct SweepOutcome {
     pub runs: usize,
     /// Runs whose status is `failed: ...`.
     pub failed: usize,
+    /// Runs a guard stopped (`stopped: ...`).
+    pub stopped: usize,
 }
 
 /// How to run a sweep.
@@ -620,6 +691,7 @@ impl Sweep {
         let bar = progress_bar(opts.progress, mine.len());
         let done = Mutex::new(0usize);
         let failed = Mutex::new(0usize);
+        let stopped = Mutex::new(0usize);
         let result: anyhow::Result<()> = pool.install(|| {
             mine.par_iter().try_for_each(|&i| {
                 let combo = &self.combos[i];
@@ -636,6 +708,9 @@ impl Sweep {
                 let note = match &result {
                     Ok(report) => {
                         row.extend(result_cells(report, jobs));
+                        if report.stop.guard().is_some() {
+                            *stopped.lock().expect("no panic holds the lock") += 1;
+                        }
                         let status = row.last().cloned().unwrap_or_default();
                         let err = report
                             .milestones
@@ -652,7 +727,7 @@ impl Sweep {
                         *failed.lock().expect("no panic holds the lock") += 1;
                         let n = header.len() - row.len() - 1;
                         row.extend(std::iter::repeat_n(String::new(), n));
-                        let msg = format!("failed: {}", e.replace(['\n', '\r'], " "));
+                        let msg = RowStatus::Failed(one_line(e)).to_string();
                         row.push(msg.clone());
                         msg
                     }
@@ -694,6 +769,7 @@ impl Sweep {
             grid: self.combos.len(),
             runs: mine.len(),
             failed: failed.into_inner().expect("no panic holds the lock"),
+            stopped: stopped.into_inner().expect("no panic holds the lock"),
         })
     }
 }
@@ -839,7 +915,7 @@ mod tests {
 
     #[test]
     fn a_bad_value_stops_the_sweep_before_it_runs() {
-        let text = include_str!("../scenes/yoga-mat.toml");
+        let text = include_str!("../../scenes/yoga-mat.toml");
         let e = Sweep::new(text, "y", &[vary("discretisation.links_per_turn=16,5000")])
             .err()
             .expect("5000 links per turn is invalid")

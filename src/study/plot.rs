@@ -10,8 +10,8 @@ use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
-use crate::analysis::{BANG_OBSERVABLES, BangStudy, PowerFit, SweepAnalysis};
-use crate::sweep::SweepTable;
+use crate::study::analysis::{BANG_OBSERVABLES, BangStudy, PowerFit, SweepAnalysis};
+use crate::study::sweep::SweepTable;
 
 type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 

@@ -1,15 +1,15 @@
 //! The `sweep` and `sweep-report` subcommands of the binary: arguments, output folders,
-//! messages and exit codes around [`uncoil::sweep`], [`uncoil::analysis`] and
-//! [`uncoil::plot`]. No sweep logic lives here.
+//! messages and exit codes around [`uncoil::study::sweep`], [`uncoil::study::analysis`] and
+//! [`uncoil::study::plot`]. No sweep logic lives here.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Args, ValueEnum};
 
-use uncoil::analysis::{Reference, SweepAnalysis};
 use uncoil::output::write_atomic;
-use uncoil::sweep::{Shard, Sweep, SweepOptions, SweepTable, Vary, merge, write_merged};
+use uncoil::study::analysis::{Reference, SweepAnalysis};
+use uncoil::study::sweep::{Shard, Sweep, SweepOptions, SweepTable, Vary, merge, write_merged};
 
 /// Arguments of `uncoil sweep`.
 #[derive(Args)]
@@ -110,7 +110,8 @@ fn folder_of(p: &Path) -> PathBuf {
 }
 
 /// `uncoil sweep`: 0 every run ended, 1 a run failed or a file could not be written,
-/// 2 bad input (a combination's scene is invalid).
+/// 2 bad input (a combination's scene is invalid), 3 a guard stopped a run (and none
+/// failed).
 pub fn sweep(args: SweepArgs) -> ExitCode {
     if !args.merge.is_empty() {
         let dir = args.out.unwrap_or_else(|| folder_of(&args.merge[0]));
@@ -172,14 +173,17 @@ pub fn sweep(args: SweepArgs) -> ExitCode {
     match sweep.run(&dir, &opts) {
         Ok(o) => {
             println!(
-                "{} runs ({} failed) of {} combinations written to {}",
+                "{} runs ({} failed, {} stopped by a guard) of {} combinations written to {}",
                 o.runs,
                 o.failed,
+                o.stopped,
                 o.grid,
                 o.path.display()
             );
             if o.failed > 0 {
                 ExitCode::from(1)
+            } else if o.stopped > 0 {
+                ExitCode::from(3)
             } else {
                 ExitCode::SUCCESS
             }
@@ -237,7 +241,7 @@ fn write_report(args: &ReportArgs) -> anyhow::Result<String> {
         }
         analysis.studies.retain(|s| args.converge.contains(&s.key));
     }
-    let files = uncoil::plot::plot_sweep(&analysis, &dir, &title)?;
+    let files = uncoil::study::plot::plot_sweep(&analysis, &dir, &title)?;
     let mut md = analysis.markdown(&title);
     md.push_str("\nPlots: ");
     md.push_str(

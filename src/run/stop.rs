@@ -1,0 +1,245 @@
+//! Why a run stopped, typed (in the manner of argmin's `TerminationReason`): the final bang
+//! at rest or at its cap, the time limit, an interruption, or a named guard with the value
+//! it measured and its bound. The report, the summary, `check`, `sweep` and the exit codes
+//! all read this one type; its text is its [`Display`](std::fmt::Display).
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+
+use crate::run::guard::{
+    ENERGY_RISE_TOLERANCE, JOINT_GAP_PER_LINK, JOINT_GAP_PER_THICKNESS, PENETRATION_PER_RADIUS,
+};
+
+/// Why a run stopped.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "reason", rename_all = "kebab-case")]
+pub enum StopReason {
+    /// The final bang came to rest: at most `stop.rest_fraction` of the kinetic energy it
+    /// received was still moving.
+    AtRest {
+        /// When (s).
+        t_s: f64,
+        /// The kinetic energy still moving, over what the bang received.
+        still_moving: f64,
+        /// The scene's `stop.rest_fraction`.
+        rest_fraction: f64,
+    },
+    /// The final bang reached `stop.bang_cap_s` before it came to rest.
+    BangCap {
+        /// When (s).
+        t_s: f64,
+        /// The kinetic energy still moving, over what the bang received.
+        still_moving: f64,
+        /// The scene's `stop.bang_cap_s` (s).
+        bang_cap_s: f64,
+    },
+    /// `stop.max_time_s` was reached before the bang ended.
+    MaxTime {
+        /// When (s).
+        t_s: f64,
+        /// The scene's `stop.max_time_s` (s).
+        max_time_s: f64,
+    },
+    /// The run was asked to stop (Ctrl-C); its outputs end at the last step taken.
+    Interrupted {
+        /// When (s).
+        t_s: f64,
+    },
+    /// A guard stopped the run.
+    Guard(GuardTrip),
+}
+
+/// How a run ended, in three kinds: what the exit code and a sweep's status tell apart.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Status {
+    /// The run ended as planned: the bang ended (at rest or at its cap), or the time limit
+    /// was reached.
+    Completed,
+    /// The run was asked to stop before its end.
+    Interrupted,
+    /// A guard stopped the run.
+    Stopped,
+}
+
+impl StopReason {
+    /// The kind of ending.
+    pub fn status(&self) -> Status {
+        match self {
+            Self::AtRest { .. } | Self::BangCap { .. } | Self::MaxTime { .. } => Status::Completed,
+            Self::Interrupted { .. } => Status::Interrupted,
+            Self::Guard(_) => Status::Stopped,
+        }
+    }
+
+    /// The guard that stopped the run, if one did.
+    pub fn guard(&self) -> Option<&GuardTrip> {
+        match self {
+            Self::Guard(trip) => Some(trip),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for StopReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::AtRest {
+                still_moving,
+                rest_fraction,
+                ..
+            } => write!(
+                f,
+                "the final bang came to rest: {:.3} % of the kinetic energy it received still \
+                 moving (stop.rest_fraction = {rest_fraction})",
+                100.0 * still_moving
+            ),
+            Self::BangCap {
+                still_moving,
+                bang_cap_s,
+                ..
+            } => write!(
+                f,
+                "the final bang reached its cap, stop.bang_cap_s = {bang_cap_s} s, with {:.3} % \
+                 of the kinetic energy it received still moving",
+                100.0 * still_moving
+            ),
+            Self::MaxTime { max_time_s, .. } => write!(f, "stop.max_time_s = {max_time_s} reached"),
+            Self::Interrupted { .. } => f.write_str("interrupted"),
+            Self::Guard(trip) => trip.fmt(f),
+        }
+    }
+}
+
+/// Which guard stopped a run.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum GuardKind {
+    /// A quantity of the state is not finite (its name); value and bound are 0.
+    NonFinite(String),
+    /// The total energy rose above E0 by more than the bound (J).
+    EnergyRise,
+    /// A joint separated by more than the bound (m).
+    JointGap,
+    /// A body sank into the floor deeper than the bound (m).
+    Penetration,
+    /// A body's centre of mass fell below the floor by more than the bound (m); the value
+    /// is its height.
+    FellThrough,
+    /// A body went farther from the start of the tape than the bound (m).
+    LeftWorld,
+}
+
+/// A guard's verdict: which guard, when, the value it measured and its bound.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GuardTrip {
+    /// The guard.
+    pub guard: GuardKind,
+    /// When it tripped (s).
+    pub t_s: f64,
+    /// The value it measured, in the bound's unit.
+    pub value: f64,
+    /// Its bound.
+    pub bound: f64,
+}
+
+impl GuardTrip {
+    /// A short name of the guard, for tables and a sweep's status.
+    pub fn name(&self) -> &'static str {
+        match self.guard {
+            GuardKind::NonFinite(_) => "non-finite",
+            GuardKind::EnergyRise => "energy-rise",
+            GuardKind::JointGap => "joint-gap",
+            GuardKind::Penetration => "penetration",
+            GuardKind::FellThrough => "fell-through",
+            GuardKind::LeftWorld => "left-world",
+        }
+    }
+}
+
+impl fmt::Display for GuardTrip {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let (t, v, b) = (self.t_s, self.value, self.bound);
+        match &self.guard {
+            GuardKind::NonFinite(name) => {
+                write!(f, "blow-up at t = {t:.6} s: {name} is not finite")
+            }
+            GuardKind::EnergyRise => write!(
+                f,
+                "energy rising at t = {t:.6} s: E - E0 = {v:.4e} J, above the bound {b:.4e} J \
+                 ({} % of the energy scale: the largest of |E0|, M g R, M g L sin(slope))",
+                100.0 * ENERGY_RISE_TOLERANCE
+            ),
+            GuardKind::JointGap => write!(
+                f,
+                "joints separating at t = {t:.6} s: gap {v:.4e} m, above the bound {b:.4e} m \
+                 (the larger of {JOINT_GAP_PER_THICKNESS} b and {} % of the outermost link)",
+                100.0 * JOINT_GAP_PER_LINK
+            ),
+            GuardKind::Penetration => write!(
+                f,
+                "floor penetration at t = {t:.6} s: {v:.4e} m, above the bound {b:.4e} m \
+                 ({PENETRATION_PER_RADIUS} R)"
+            ),
+            GuardKind::FellThrough => write!(
+                f,
+                "a body fell through the floor at t = {t:.6} s: centre of mass at y = {v:.4e} m, \
+                 below the bound -{b:.4e} m ({PENETRATION_PER_RADIUS} R)"
+            ),
+            GuardKind::LeftWorld => write!(
+                f,
+                "a body left the world at t = {t:.6} s: {v:.4e} m from the start, beyond the \
+                 bound {b:.4e} m"
+            ),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_guard_stop_is_stopped_and_reads_back_from_json() {
+        let stop = StopReason::Guard(GuardTrip {
+            guard: GuardKind::JointGap,
+            t_s: 0.074,
+            value: 0.02,
+            bound: 0.005,
+        });
+        assert_eq!(stop.status(), Status::Stopped);
+        let json = serde_json::to_string(&stop).unwrap();
+        assert!(json.contains("\"reason\":\"guard\""), "{json}");
+        assert!(json.contains("\"guard\":\"joint-gap\""), "{json}");
+        let back: StopReason = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, stop);
+        assert!(
+            stop.to_string()
+                .starts_with("joints separating at t = 0.074000 s")
+        );
+    }
+
+    #[test]
+    fn the_ends_as_planned_are_completed_and_an_interruption_is_not() {
+        let rest = StopReason::AtRest {
+            t_s: 2.4,
+            still_moving: 1.7e-4,
+            rest_fraction: 1e-3,
+        };
+        let max = StopReason::MaxTime {
+            t_s: 1.0,
+            max_time_s: 1.0,
+        };
+        assert_eq!(rest.status(), Status::Completed);
+        assert_eq!(max.status(), Status::Completed);
+        assert_eq!(
+            StopReason::Interrupted { t_s: 0.1 }.status(),
+            Status::Interrupted
+        );
+        assert_eq!(
+            rest.to_string(),
+            "the final bang came to rest: 0.017 % of the kinetic energy it received still moving (stop.rest_fraction = 0.001)"
+        );
+    }
+}

@@ -1,0 +1,85 @@
+//! The theory layer: the paper's analytic references and the exact-geometry model, pure
+//! `f64` with the seed's equation numbers and the ERRATA ids. It reads a validated
+//! [`Scene`] and the [`spiral`](crate::spiral) geometry; it never steps an engine, never
+//! runs a loop and never writes a file. [`References`] is built once per scene and passed
+//! on to the run and its outputs.
+
+pub mod forces;
+pub mod reference;
+pub mod rivals;
+
+use crate::scene::Scene;
+use forces::{ForceFn, force_reference};
+use reference::{Continuum, ExactGeometry, ForceTorque, Params};
+use rivals::{Rival, SpoolGeometry, rivals};
+
+/// The analytic references of a scene.
+pub struct References {
+    /// Eq. (7).
+    pub continuum: Continuum,
+    /// Eq. (17).
+    pub force_torque: ForceTorque,
+    /// The exact-geometry model.
+    pub exact: ExactGeometry,
+    /// The scene's valid reference among the paper's rivals, if it has one.
+    pub valid: Option<Rival>,
+    /// The case's analytic constraint forces.
+    pub forces: Option<ForceFn>,
+    /// Spools: `l / r`, the angle of the whole tape (rad).
+    pub theta_per_fraction: Option<f64>,
+    /// The floor's friction coefficient for the exact-geometry model's force split
+    /// (infinite on a sticky floor); `None` on a fixed axis, which has no floor.
+    pub floor_grip: Option<f64>,
+}
+
+impl References {
+    /// Builds and tabulates the references for a scene, down to half the bang radius.
+    pub fn new(scene: &Scene) -> Self {
+        let p = params(scene);
+        let r_end = 0.5 * scene.stop.bang_radius_m;
+        Self {
+            continuum: Continuum::new(p, r_end),
+            force_torque: ForceTorque::new(p),
+            exact: exact_geometry(scene),
+            valid: rivals(scene).into_iter().find(|r| r.valid),
+            forces: force_reference(scene),
+            theta_per_fraction: (scene.tape.core_radius_m > 0.0).then(|| {
+                let sg = SpoolGeometry::of(scene);
+                sg.l_m / sg.r_m
+            }),
+            floor_grip: match (scene.fixed_axis, scene.sticky) {
+                (true, _) => None,
+                (false, true) => Some(f64::INFINITY),
+                (false, false) => Some(scene.friction),
+            },
+        }
+    }
+}
+
+/// The exact-geometry model of a scene, on its slope or sliding on a frictionless floor,
+/// tabulated to half the bang radius (a solid coil) or to 99.5 % laid (a spool).
+pub fn exact_geometry(scene: &Scene) -> ExactGeometry {
+    let (p, slope) = (params(scene), scene.slope_deg.to_radians());
+    let f_end = if scene.tape.core_radius_m > 0.0 {
+        0.995
+    } else {
+        1.0 - (0.5 * scene.stop.bang_radius_m / scene.tape.outer_radius_m).powi(2)
+    };
+    if scene.friction <= 0.0 {
+        ExactGeometry::frictionless(p, f_end)
+    } else {
+        ExactGeometry::to_fraction(p, slope, f_end)
+    }
+}
+
+/// The reference parameters of a scene.
+pub fn params(scene: &Scene) -> Params {
+    Params {
+        outer_radius_m: scene.tape.outer_radius_m,
+        thickness_m: scene.tape.thickness_m,
+        mass_kg: scene.tape.mass_kg,
+        core_radius_m: scene.tape.core_radius_m,
+        g_m_s2: scene.g_m_s2,
+        push_speed_m_s: scene.push_speed_m_s,
+    }
+}
