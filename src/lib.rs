@@ -3,7 +3,7 @@
 //! Surface", with the corrections listed in ERRATA.md).
 //!
 //! The crate is a stack of layers; each imports only the layers below it (a test,
-//! `layers::each_layer_imports_only_the_layers_below_it`, keeps the rule):
+//! `house::each_layer_imports_only_the_layers_below_it` in `tests/house.rs`, keeps the rule):
 //!
 //! ```text
 //! 6 study    check, sweep, analysis, plot          many runs, a run's files

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use assert_cmd::Command;
 use predicates::prelude::*;
-use uncoil::run::guard::LimitKind;
+use uncoil::run::limits::LimitKind;
 use uncoil::run::stop::Status;
 use uncoil::run::{RunReport, run};
 use uncoil::scene::Scene;

@@ -48,9 +48,9 @@ fn yoga_mat_follows_the_exact_geometry_model_and_keeps_its_energy_for_the_bang()
         assert!(
             matches!(
                 l.kind,
-                uncoil::run::guard::LimitKind::FewTurns
-                    | uncoil::run::guard::LimitKind::ExactModelHops
-                    | uncoil::run::guard::LimitKind::LiftOff
+                uncoil::run::limits::LimitKind::FewTurns
+                    | uncoil::run::limits::LimitKind::ExactModelHops
+                    | uncoil::run::limits::LimitKind::LiftOff
             ) && l.r_m < 3.0 * yoga_mat().tape.thickness_m + 1e-9,
             "yoga mat: {l:?}"
         );

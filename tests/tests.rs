@@ -4,7 +4,7 @@ mod bang;
 mod cli;
 mod fuzz;
 mod hard;
-mod layers;
+mod house;
 mod mcap;
 mod sim;
 mod support;

@@ -195,3 +195,80 @@ pub(super) fn step_work(
         joints_j: joint_w,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The floor's force on everything touching it during the last step of length `dt`:
+    /// `(normal, horizontal)` in N, the step's contact impulses (as the model reads them)
+    /// over `dt`.
+    fn floor_forces(world: &PhysicsWorld, floor: ColliderHandle, dt: f64) -> (f64, f64) {
+        floor_impulses(&world.narrow_phase, &world.colliders, floor).fold(
+            (0.0, 0.0),
+            |(n, f), c| {
+                let p = c.normal + c.friction;
+                (n + p.y / dt, f + p.x / dt)
+            },
+        )
+    }
+
+    /// A box of mass `m` on a halfspace floor with friction 0.5, started with speed `vx`.
+    fn box_on_floor(vx: f64) -> (PhysicsWorld, ColliderHandle, RigidBodyHandle) {
+        let mut world = PhysicsWorld::new();
+        world.integration_parameters.dt = 1e-3;
+        let ground = world.insert_body(RigidBodyBuilder::fixed());
+        let floor = world.insert_collider(
+            ColliderBuilder::new(SharedShape::halfspace(Vector::Y)).friction(0.5),
+            Some(ground),
+        );
+        let body = world.insert_body(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(0.0, 0.05))
+                .linvel(Vector::new(vx, 0.0)),
+        );
+        world.insert_collider(
+            ColliderBuilder::cuboid(0.1, 0.05)
+                .density(100.0)
+                .friction(0.5),
+            Some(body),
+        );
+        (world, floor, body)
+    }
+
+    #[test]
+    fn resting_box_feels_its_weight_upward_and_no_friction() {
+        let (mut world, floor, body) = box_on_floor(0.0);
+        for _ in 0..200 {
+            world.step();
+        }
+        let weight = world.bodies[body].mass() * 9.81;
+        let (n, f) = floor_forces(&world, floor, 1e-3);
+        assert!(
+            (n / weight - 1.0).abs() < 0.01,
+            "N = {n:.4} N, weight {weight:.4} N"
+        );
+        assert!(f.abs() < 1e-6 * weight, "F = {f:.3e} N on a resting box");
+    }
+
+    #[test]
+    fn sliding_box_feels_friction_against_its_motion() {
+        // Sliding towards +x: kinetic friction mu m g acts along -x.
+        let (mut world, floor, body) = box_on_floor(1.0);
+        for _ in 0..20 {
+            world.step();
+        }
+        let weight = world.bodies[body].mass() * 9.81;
+        assert!(world.bodies[body].linvel().x > 0.5, "still sliding");
+        let (n, f) = floor_forces(&world, floor, 1e-3);
+        assert!(
+            (n / weight - 1.0).abs() < 0.01,
+            "N = {n:.4} N, weight {weight:.4} N"
+        );
+        assert!(
+            (f / (-0.5 * weight) - 1.0).abs() < 0.01,
+            "F = {f:.4} N, expected -mu m g = {:.4} N",
+            -0.5 * weight
+        );
+    }
+}

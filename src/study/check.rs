@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 
 use crate::output::{CSV_COLUMNS, CsvObserver, ReportObserver};
-use crate::run::guard::label;
+use crate::run::limits::label;
 use crate::run::stop::{Status, StopReason};
 use crate::run::{Observer, RunReport, run};
 use crate::scene::Scene;

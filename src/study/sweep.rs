@@ -19,7 +19,7 @@ use anyhow::Context as _;
 use rayon::prelude::*;
 
 use crate::output::write_atomic;
-use crate::run::guard::LimitKind;
+use crate::run::limits::LimitKind;
 use crate::run::stop::StopReason;
 use crate::run::{RunReport, milestone_radii, run};
 use crate::scene::overrides::{Override, OverrideSyntaxError, check_key, scene_with_overrides};

@@ -1,0 +1,246 @@
+//! The final bang: the release of the remaining coil as rigid pieces at least
+//! `bang_piece_m` long, each step's energy booked by mechanism, and its end at rest or at
+//! its cap.
+
+use super::*;
+
+impl Model {
+    /// Joins the moving links, in order along the tape, into rigid pieces at least
+    /// `bang_piece_m` long (a short remainder joins the last piece). Each piece moves with
+    /// its parts' momentum and angular momentum; the kinetic energy of their relative
+    /// motion is lost, and returned (J).
+    pub(super) fn join_pieces(&mut self) -> f64 {
+        let before = self.energy().0;
+        let parts: Vec<Piece> = self.free.drain(..).collect();
+        let mut groups: Vec<std::ops::Range<usize>> = Vec::new();
+        let (mut start, mut length) = (0, 0.0);
+        for (i, p) in parts.iter().enumerate() {
+            length += self.links[p.first..=p.last]
+                .iter()
+                .map(|l| l.length_m)
+                .sum::<f64>();
+            if length >= self.bang_piece_m {
+                groups.push(start..i + 1);
+                start = i + 1;
+                length = 0.0;
+            }
+        }
+        if start < parts.len() {
+            match groups.last_mut() {
+                Some(last) => last.end = parts.len(),
+                None => groups.push(start..parts.len()),
+            }
+        }
+        for group in groups {
+            let group = &parts[group];
+            // Mass, centre of mass and momentum, then inertia and angular momentum about
+            // the centre of mass (world frame).
+            let (mut mass, mut first_moment, mut momentum) = (0.0, Vector::ZERO, Vector::ZERO);
+            for part in group {
+                let body = &self.world.bodies[part.body];
+                mass += body.mass();
+                first_moment += body.center_of_mass() * body.mass();
+                momentum += body.linvel() * body.mass();
+            }
+            let com = first_moment / mass;
+            let (mut inertia, mut spin) = (0.0, 0.0);
+            for part in group {
+                let body = &self.world.bodies[part.body];
+                let r = body.center_of_mass() - com;
+                let own = body.mass_properties().effective_angular_inertia();
+                inertia += own + body.mass() * r.length_squared();
+                spin += own * body.angvel() + body.mass() * r.perp_dot(body.linvel());
+            }
+            // The new body's frame is the world's: its nodes are where they are now.
+            for part in group {
+                let pose = *self.world.bodies[part.body].position();
+                for k in part.first..=part.last {
+                    self.local[k] = self.local[k].map(|n| pose.transform_point(n));
+                }
+                self.world.remove_body(part.body);
+            }
+            let first = group[0].first;
+            let body = self.world.insert_body(
+                RigidBodyBuilder::dynamic()
+                    .additional_mass_properties(MassProperties::new(com, mass, inertia))
+                    .linvel(momentum / mass)
+                    .angvel(spin / inertia)
+                    .can_sleep(false)
+                    .user_data(first as u128),
+            );
+            self.world.bodies[body].recompute_mass_properties_from_colliders(&self.world.colliders);
+            let last = group[group.len() - 1].last;
+            let piece = Piece {
+                first,
+                last,
+                body,
+                rest_y_m: self.rest_height_m(first, last),
+            };
+            self.join_near_node(piece);
+            self.lay_piece(piece);
+            self.free.push_back(piece);
+        }
+        before - self.energy().0
+    }
+
+    /// Releases the remaining wound links as a free chain: the final bang begins.
+    pub(super) fn release_coil(&mut self) {
+        let Some(coil) = self.coil else { return };
+        let (kinetic_in, potential_in) = self.energy();
+        let before = kinetic_in + potential_in;
+        self.phase = Phase::Bang;
+        // From here on every joint, old and new, has the bang's softness.
+        self.joint_softness = self.bang_joint_softness;
+        for (_, j) in self.world.impulse_joints.iter_mut() {
+            j.data.softness = self.bang_joint_softness;
+        }
+        if let Some(prev) = self.free.back().copied() {
+            self.unpin_from_coil(prev.body, coil);
+        }
+        // The piece pinned to the world may swing in the bang: let it touch the floor.
+        if let Some(first) = self.free.front().copied() {
+            let pins: Vec<_> = self
+                .world
+                .impulse_joints
+                .joints_between(self.ground, first.body)
+                .map(|(h, _)| h)
+                .collect();
+            for h in pins {
+                if let Some(j) = self.world.impulse_joints.get_mut(h, false) {
+                    j.data.set_contacts_enabled(true);
+                }
+            }
+        }
+        for k in self.first_attached..self.links.len() {
+            let piece = self.spawn_piece(k, k, coil);
+            self.join_near_node(piece);
+            self.free.push_back(piece);
+        }
+        self.world.remove_body(coil);
+        self.coil = None;
+        self.coil_ball = None;
+        self.first_attached = self.links.len();
+        // The engine leaves the joints a few microns apart under tension; closing those gaps
+        // later, under the bang's far larger tension, would do work on the tape. Close them
+        // now, by position alone, then join the links into the bang's pieces.
+        self.close_gaps();
+        let joined_j = self.join_pieces();
+        self.bang.ledger.freeze_j += joined_j;
+        self.world.integration_parameters.num_solver_iterations = self.bang_iterations;
+        let (kinetic, potential) = self.energy();
+        self.bang.started_s = self.t;
+        self.bang.kinetic_in_j = kinetic_in;
+        // Spawning copies the velocity field, so this is the joining's loss, but for closing
+        // the gaps, which moves the links by microns.
+        let release_j = before - kinetic - potential;
+        self.ledger.bang_j += release_j;
+        self.bang.ledger.residual_j += release_j - joined_j;
+    }
+
+    /// Books one step of the final bang: the work of the floor (its `contacts`) and the joints
+    /// on the moving pieces (from their states `before` it, in the order of `free`) into the
+    /// bang's ledger, with `lost_j` what the step dissipated and `kinetic` the kinetic energy
+    /// after it; the fastest point, the floor's impulse; and ends the bang once it has come to
+    /// rest.
+    pub(super) fn book_bang_step(
+        &mut self,
+        before: &[BodyState],
+        contacts: &[work::FloorImpulse],
+        lost_j: f64,
+        kinetic: f64,
+        dt: f64,
+    ) {
+        self.ledger.bang_j += lost_j;
+        if self.free.is_empty() {
+            // Everything is frozen: at rest.
+            self.bang.ledger.residual_j += lost_j;
+            self.end_bang(BangEnd::Rest);
+            return;
+        }
+        let bodies: Vec<Moved<'_>> = self
+            .free
+            .iter()
+            .zip(before)
+            .map(|(p, &before)| Moved {
+                body: &self.world.bodies[p.body],
+                before,
+            })
+            .collect();
+        let floor: Vec<_> = contacts
+            .iter()
+            .filter_map(|&c| {
+                #[allow(clippy::cast_possible_truncation)]
+                let k = self.world.bodies.get(c.body)?.user_data as usize;
+                let i = self.free.binary_search_by_key(&k, |p| p.first).ok()?;
+                Some((i, c))
+            })
+            .collect();
+        let work = work::step_work(&bodies, &floor, self.world.gravity, dt);
+        let impulse: f64 = floor.iter().map(|(_, c)| c.normal.length()).sum();
+        // Potential energy above lying flat on the floor: the weight across the floor times
+        // the centre of mass's height above where it would lie (never negative: on a fixed
+        // axis the tape hangs far above a floor it cannot reach).
+        let raised_j: f64 = self
+            .free
+            .iter()
+            .map(|p| {
+                let body = &self.world.bodies[p.body];
+                body.mass() * self.g * (body.center_of_mass().y - p.rest_y_m).max(0.0)
+            })
+            .sum();
+        let top_speed = self
+            .free
+            .iter()
+            .flat_map(|&p| {
+                let body = &self.world.bodies[p.body];
+                let pose = *body.position();
+                self.piece_nodes(p)
+                    .map(move |n| body.velocity_at_point(pose.transform_point(n)).length())
+            })
+            .fold(0.0, f64::max);
+
+        let b = &mut self.bang;
+        b.ledger.floor_normal_j -= work.normal_j;
+        b.ledger.floor_friction_j -= work.friction_j;
+        b.ledger.joints_j -= work.joints_j;
+        b.ledger.residual_j += lost_j + work.normal_j + work.friction_j + work.joints_j;
+        b.top_speed_m_s = b.top_speed_m_s.max(top_speed);
+        b.floor_impulse_n_s += impulse;
+        if dt > 0.0 {
+            b.peak_floor_force_n = b.peak_floor_force_n.max(impulse / dt);
+        }
+        if kinetic + raised_j < self.rest_fraction * b.kinetic_in_j {
+            self.end_bang(BangEnd::Rest);
+        }
+    }
+
+    /// Ends the final bang: nothing more is simulated.
+    pub(super) fn end_bang(&mut self, why: BangEnd) {
+        self.bang.end = Some(why);
+        self.phase = Phase::Done;
+    }
+
+    /// Closes the joints' gaps along the chain by translating each piece, from the laid end
+    /// on, so that its near node meets what holds it; velocities are untouched.
+    pub(super) fn close_gaps(&mut self) {
+        // The first piece meets the world pin's anchor, if it has one.
+        let mut target: Option<Vector> = self.free.front().and_then(|first| {
+            self.world
+                .impulse_joints
+                .joints_between(self.ground, first.body)
+                .map(|(_, j)| j.data.local_anchor1())
+                .last()
+        });
+        for i in 0..self.free.len() {
+            let piece = self.free[i];
+            let [near, far] = [self.local[piece.first][0], self.local[piece.last][1]];
+            let body = &mut self.world.bodies[piece.body];
+            let pose = *body.position();
+            if let Some(t) = target {
+                let d = t - pose.transform_point(near);
+                body.set_translation(pose.translation + d, false);
+            }
+            target = Some(body.position().transform_point(far));
+        }
+    }
+}

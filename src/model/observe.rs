@@ -1,0 +1,171 @@
+//! What the model shows of itself after a step: the [`Observation`](super::Observation), the
+//! link nodes for a frame, where the tape ends, and its health for the guards. It moves
+//! nothing.
+
+use super::*;
+
+impl Model {
+    pub(super) fn max_joint_gap(&self) -> f64 {
+        self.world
+            .impulse_joints
+            .iter()
+            .map(|(_, j)| {
+                let (b1, b2) = (&self.world.bodies[j.body1()], &self.world.bodies[j.body2()]);
+                let a1 = b1.position().transform_point(j.data.local_anchor1());
+                let a2 = b2.position().transform_point(j.data.local_anchor2());
+                (a1 - a2).length()
+            })
+            .fold(0.0, f64::max)
+    }
+
+    pub(super) fn max_penetration(&self) -> f64 {
+        let mut deepest: f64 = 0.0;
+        for pair in self.world.narrow_phase.contact_pairs_with(self.floor) {
+            if let PairContacts::Rigid(contacts) = &pair.contacts {
+                for m in &contacts.manifolds {
+                    for p in &m.points {
+                        deepest = deepest.max(-p.dist);
+                    }
+                }
+            }
+        }
+        deepest
+    }
+
+    /// The state after the last step.
+    pub fn observe(&mut self) -> Observation {
+        let (kinetic_j, potential_j) = self.energy();
+        self.energy_j = kinetic_j + potential_j;
+        // The floor's force on everything that moves over the last step.
+        let (normal_n, friction_n) = if self.last_dt > 0.0 {
+            let f = self.impulses.floor_on_moving;
+            (f[1] / self.last_dt, f[0] / self.last_dt)
+        } else {
+            (0.0, 0.0)
+        };
+        let (x_m, omega) = match self.coil {
+            Some(coil) => {
+                let body = &self.world.bodies[coil];
+                let p = self.spiral.point(self.psi_low);
+                (
+                    body.position().transform_point(Vector::new(p[0], p[1])).x,
+                    -body.angvel(),
+                )
+            }
+            None => (self.x_low, 0.0),
+        };
+        self.x_low = x_m;
+        Observation {
+            t_s: self.t,
+            phase: self.phase,
+            laid_fraction: self.laid_fraction(),
+            psi_low: self.psi_low,
+            x_m,
+            omega_rad_s: omega,
+            kinetic_j,
+            potential_j,
+            normal_n,
+            friction_n,
+            ledger: self.ledger,
+            bang: self.bang,
+            detached: self.first_attached,
+            active_bodies: self.world.bodies.len() - 1,
+            max_joint_gap_m: self.max_joint_gap(),
+            max_penetration_m: self.max_penetration(),
+            dt_s: self.last_dt,
+            angular_momentum_o: self.moved_angular_momentum,
+            impulses: self.impulses,
+        }
+    }
+
+    /// The link nodes in the world frame (m), for drawing: `(off, wound)`. `off` runs from
+    /// the tape's outer end through the frozen and the moving links that left the coil;
+    /// `wound` runs from the coil's outermost attached node inward. Consecutive nodes bound
+    /// one link; either list is empty when it has no link.
+    pub fn link_nodes(&self) -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
+        let mut off = self.frozen_nodes.clone();
+        for (i, &piece) in self.free.iter().enumerate() {
+            if i == 0 {
+                // The first moving piece's near node replaces the last frozen far node.
+                off.pop();
+            }
+            let pose = self.world.bodies[piece.body].position();
+            let nodes = self.piece_nodes(piece).map(|n| pose.transform_point(n));
+            // Each piece's far node is the next one's near node.
+            let skip_far = usize::from(i + 1 < self.free.len());
+            let count = piece.last - piece.first + 2 - skip_far;
+            off.extend(nodes.take(count).map(|p| [p.x, p.y]));
+        }
+        let mut wound = Vec::new();
+        if let Some(coil) = self.coil {
+            let pose = self.world.bodies[coil].position();
+            let attached = &self.links[self.first_attached..];
+            let nodes = attached
+                .first()
+                .map(|l| l.near)
+                .into_iter()
+                .chain(attached.iter().map(|l| l.far));
+            wound.extend(nodes.map(|n| {
+                let p = pose.transform_point(Vector::new(n[0], n[1]));
+                [p.x, p.y]
+            }));
+        }
+        (off, wound)
+    }
+
+    /// Where the tape's free (inner) end is: x of its innermost node (m).
+    pub fn tape_end_x_m(&self) -> f64 {
+        if let Some(&piece) = self.free.back() {
+            let pose = self.world.bodies[piece.body].position();
+            return pose.transform_point(self.local[piece.last][1]).x;
+        }
+        if self.coil.is_none()
+            && let Some(n) = self.frozen_nodes.last()
+        {
+            return n[0];
+        }
+        let (_, wound) = self.link_nodes();
+        wound.last().map_or(0.0, |n| n[0])
+    }
+
+    /// The tape's midline length as the links lay it: the sum of their lengths (m).
+    pub fn tape_length_m(&self) -> f64 {
+        self.links.iter().map(|l| l.length_m).sum()
+    }
+
+    /// Potential energy of the tape lying flat, midline at `b/2`, from `x = 0` on (J).
+    pub fn flat_potential_j(&self) -> f64 {
+        self.total_mass * self.g * self.half_b - self.g_along * self.flat_first_moment
+    }
+
+    /// What the run's guards read after a step: slip at the rolling contact, how far the
+    /// bodies have gone, their fastest spin, and whether every body state is finite.
+    pub fn health(&self) -> Health {
+        let slip_m_s = self.coil.map(|coil| {
+            let body = &self.world.bodies[coil];
+            let p = self.spiral.point(self.psi_low);
+            let contact = body.position().transform_point(Vector::new(p[0], p[1]));
+            body.velocity_at_point(contact).x
+        });
+        let mut health = Health {
+            slip_m_s,
+            farthest_m: 0.0,
+            lowest_m: 0.0,
+            max_spin_rad_s: 0.0,
+            finite: true,
+        };
+        for (_, body) in self.world.bodies.iter() {
+            if !body.is_dynamic() {
+                continue;
+            }
+            let c = body.center_of_mass();
+            let v = body.linvel();
+            let w = body.angvel();
+            health.finite &= [c.x, c.y, v.x, v.y, w].iter().all(|x| x.is_finite());
+            health.farthest_m = health.farthest_m.max(c.length());
+            health.lowest_m = health.lowest_m.min(c.y);
+            health.max_spin_rad_s = health.max_spin_rad_s.max(w.abs());
+        }
+        health
+    }
+}

@@ -1,0 +1,310 @@
+//! The readable summary printed after a run: the scene, how the run ended, the times
+//! against the references, the energy ledger, the final bang, the guards' maxima and where
+//! the references stop applying. It reads a [`RunReport`]; it writes no file.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::output::compare::cell;
+use crate::run::RunReport;
+use crate::run::stop::Status;
+use crate::theory::rivals::{Case, rivals};
+
+fn pct(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{:+.2}%", 100.0 * v))
+}
+
+fn secs(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{v:.4}"))
+}
+
+/// The level coil's times: the exact geometry it converges to, eq. (7) and eq. (17), with
+/// the simulation's error and the continuum model's own.
+fn coil_times(o: &mut String, report: &RunReport) {
+    let _ = writeln!(
+        o,
+        "Time to reach each radius (compared at equal laid mass fraction f = 1 - (r/R)^2):"
+    );
+    let _ = writeln!(
+        o,
+        "  {:<6} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "r", "f", "sim s", "exact s", "eq.7 s", "eq.17 s", "sim/ex", "sim/eq7", "ex/eq7"
+    );
+    for m in &report.milestones {
+        let _ = writeln!(
+            o,
+            "  {:<6} {:>7.4} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+            m.label,
+            m.laid_fraction,
+            secs(m.t_sim_s),
+            secs(m.t_geo_s),
+            secs(m.t_eq7_s),
+            secs(m.t_eq17_s),
+            pct(m.err_vs_geo),
+            pct(m.err_vs_eq7),
+            pct(m.geo_vs_eq7)
+        );
+    }
+    let _ = writeln!(
+        o,
+        "  sim/ex: the simulation's error against the exact-geometry model it converges to;"
+    );
+    let _ = writeln!(
+        o,
+        "  ex/eq7: the continuum model's own idealisation (O(b/r)); eq. 17 ignores gravity."
+    );
+}
+
+/// Any other case's times against the rivals the paper gives for it (`uncoil compare`'s
+/// table as plain text).
+fn rival_times(o: &mut String, report: &RunReport) {
+    let rv = rivals(&report.scene);
+    let _ = writeln!(
+        o,
+        "Time to reach each laid fraction f, against the analyses of {} (the rival's time over the \
+         simulation's, minus 1; * = the reference the simulation must converge to):",
+        Case::of(&report.scene).section()
+    );
+    let mut head = format!("  {:<6} {:>7} {:>9}", "", "f", "sim s");
+    for r in &rv {
+        let star = if r.valid { " *" } else { "" };
+        let _ = write!(head, " {:>22}", format!("{}{star} s", r.label));
+    }
+    let _ = writeln!(o, "{head}");
+    for m in &report.milestones {
+        let mut row = format!(
+            "  {:<6} {:>7.4} {:>9}",
+            m.label,
+            m.laid_fraction,
+            secs(m.t_sim_s)
+        );
+        for r in &rv {
+            let _ = write!(row, " {:>22}", cell(r, m.laid_fraction, m.t_sim_s));
+        }
+        let _ = writeln!(o, "{row}");
+    }
+    for r in &rv {
+        let _ = writeln!(o, "  {}: {}", r.label, r.description);
+    }
+}
+
+/// The final bang's part of the summary: what it received, where that energy went by
+/// mechanism, how violent it was and where the tape ended.
+fn bang_summary(o: &mut String, report: &RunReport, bang: &crate::run::BangReport) {
+    let l = &report.ledger;
+    let end = match bang.ended_by {
+        Some(crate::model::BangEnd::Rest) => "came to rest",
+        Some(crate::model::BangEnd::Cap) => "reached its cap (stop.bang_cap_s)",
+        None => "was cut short",
+    };
+    let _ = writeln!(
+        o,
+        "The final bang ({end} {:.4} s after the release at t = {} s):",
+        bang.duration_s,
+        secs(l.bang_time_s)
+    );
+    let _ = writeln!(
+        o,
+        "  received {:.5} J of kinetic energy; fastest point {:.4} m/s; peak floor force {:.4e} N; \
+         floor impulse {:.4e} N s",
+        bang.kinetic_in_j, bang.top_speed_m_s, bang.peak_floor_force_n, bang.floor_impulse_n_s
+    );
+    let d = l.dissipated_by_bang_j;
+    let b = &l.bang;
+    if l.bang_split_meaningful() {
+        let of = |x: f64| 100.0 * x / d;
+        let _ = writeln!(
+            o,
+            "  dissipated {d:.5} J, measured where it happened: floor impacts {:.5} J ({:.1} %), \
+             floor friction {:.5} J ({:.1} %), freezing {:.5} J ({:.2} %);",
+            b.floor_normal_j,
+            of(b.floor_normal_j),
+            b.floor_friction_j,
+            of(b.floor_friction_j),
+            b.freeze_j,
+            of(b.freeze_j)
+        );
+        let _ = writeln!(
+            o,
+            "  numerical (zero for ideal joints and an exact step): joints {:.5} J ({:.1} %), \
+             residual {:.5} J ({:.1} %)",
+            b.joints_j,
+            of(b.joints_j),
+            b.residual_j,
+            of(b.residual_j)
+        );
+    } else {
+        let _ = writeln!(
+            o,
+            "  dissipated {d:.5} J ({:.3} % of S): too little to split by mechanism (under {} %)",
+            100.0 * d / l.energy_scale_j,
+            100.0 * crate::run::BANG_SPLIT_MIN_OF_SCALE
+        );
+    }
+    if report.scene.fixed_axis {
+        let _ = writeln!(
+            o,
+            "  the tape hangs from its axis with no floor to stop it: still moving {:.3e} J",
+            bang.still_moving_j
+        );
+        return;
+    }
+    let short = bang.laid_length_m - bang.end_x_m;
+    let _ = writeln!(
+        o,
+        "  the tape's free end lies at x = {:.4} m, {:.4} m {} its flat length {:.4} m; still moving \
+         {:.3e} J ({:.3} % of what the bang received)",
+        bang.end_x_m,
+        short.abs(),
+        if short >= 0.0 { "short of" } else { "beyond" },
+        bang.laid_length_m,
+        bang.still_moving_j,
+        100.0 * bang.still_moving_j / bang.kinetic_in_j.max(f64::MIN_POSITIVE)
+    );
+}
+
+/// The readable summary printed after a run.
+pub fn summary(report: &RunReport, out_dir: &Path) -> String {
+    let s = &report.scene;
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
+        "uncoil: {} (R = {} m, b = {} m, M = {} kg, push {} m/s, friction {})",
+        s.name,
+        s.tape.outer_radius_m,
+        s.tape.thickness_m,
+        s.tape.mass_kg,
+        s.push_speed_m_s,
+        s.friction
+    );
+    let _ = writeln!(
+        o,
+        "  {} links ({} per turn), {} steps, {:.3} s simulated in {:.3} s wall ({:.3} s to the bang); {}: {}",
+        report.links,
+        s.links_per_turn,
+        report.steps,
+        report.sim_time_s,
+        report.wall_time_s,
+        report.wall_time_rolling_s,
+        match report.stop.status() {
+            Status::Completed => "completed",
+            Status::Interrupted => "INTERRUPTED",
+            Status::Stopped => "STOPPED by a guard",
+        },
+        report.stop
+    );
+    let _ = writeln!(o);
+    if Case::of(s) == Case::Coil {
+        coil_times(&mut o, report);
+    } else {
+        rival_times(&mut o, report);
+    }
+    if let Some(f) = report.geo_hop_fraction {
+        let _ = writeln!(
+            o,
+            "  The exact-geometry model needs a floor that pulls (N < 0) from f = {f:.4} on."
+        );
+    }
+    let _ = writeln!(o);
+    ledger_summary(&mut o, report);
+    if let Some(bang) = &report.bang {
+        let _ = writeln!(o);
+        bang_summary(&mut o, report, bang);
+    }
+    let _ = writeln!(o);
+    health_summary(&mut o, report);
+    let _ = writeln!(
+        o,
+        "Wrote {} and {}",
+        out_dir.join("samples.csv").display(),
+        out_dir.join("report.json").display()
+    );
+    o
+}
+
+/// The energy ledger: E0, what was lost before the bang and where, what the bang received
+/// and dissipated, what is left.
+fn ledger_summary(o: &mut String, report: &RunReport) {
+    let l = &report.ledger;
+    let pc = |x: f64| 100.0 * x / l.energy_scale_j;
+    let _ = writeln!(
+        o,
+        "Energy ledger (E0 = {:.4} J; MgR = {:.4} J; flat tape at rest keeps {:.4} J; percentages \
+         of the energy scale S = {:.4} J, the largest of |E0|, MgR and the kinetic energy into the \
+         bang):",
+        l.e0_j, l.mgr_j, l.flat_potential_j, l.energy_scale_j
+    );
+    let b = &l.before_bang;
+    let _ = writeln!(
+        o,
+        "  lost before the bang   {:>9.5} J ({:>6.2}% of S): steps {:.5}, detach {:.5}, freeze {:.5}",
+        l.lost_before_bang_j,
+        pc(l.lost_before_bang_j),
+        b.step_j,
+        b.detach_j,
+        b.freeze_j
+    );
+    if let Some(d) = report
+        .milestones
+        .iter()
+        .find(|m| m.label == "2b")
+        .and_then(|m| m.dissipated_j)
+    {
+        let _ = writeln!(
+            o,
+            "  lost before r = 2b     {:>9.5} J ({:>6.2}% of S)",
+            d,
+            pc(d)
+        );
+    }
+    let _ = writeln!(
+        o,
+        "  kinetic into the bang  {:>9.5} J ({:>6.2}% of S){}",
+        l.kinetic_into_bang_j,
+        pc(l.kinetic_into_bang_j),
+        l.bang_time_s
+            .map_or_else(String::new, |t| format!(", at t = {t:.4} s"))
+    );
+    let _ = writeln!(
+        o,
+        "  dissipated by the bang {:>9.5} J ({:>6.2}% of S)",
+        l.dissipated_by_bang_j,
+        pc(l.dissipated_by_bang_j)
+    );
+    let _ = writeln!(
+        o,
+        "  left at the end        {:>9.5} J ({:>6.2}% of S, above the flat rest state)",
+        l.left_j,
+        pc(l.left_j)
+    );
+}
+
+/// The guards' maxima against their bounds, and where the references stop applying.
+fn health_summary(o: &mut String, report: &RunReport) {
+    let _ = writeln!(
+        o,
+        "Max joint separation {:.2e} m (bound {:.2e}), max floor penetration {:.2e} m (bound {:.2e}).",
+        report.max_joint_gap_m,
+        report.bounds.joint_gap_m,
+        report.max_penetration_m,
+        report.bounds.penetration_m
+    );
+    let _ = writeln!(
+        o,
+        "Max energy rise above E0 {:+.2e} of S (the guard's bound {:.3e} J); fastest spin {:.4e} rad/s.",
+        report.max_energy_rise_rel, report.bounds.energy_rise_j, report.max_spin_rad_s
+    );
+    if !report.reference_limits.is_empty() {
+        let _ = writeln!(o, "Where the references stop applying:");
+        for l in &report.reference_limits {
+            let _ = writeln!(
+                o,
+                "  {:<10} t = {:>9} s, r = {:.4e} m: {}",
+                crate::run::limits::label(l.kind),
+                secs(l.t_s),
+                l.r_m,
+                l.detail
+            );
+        }
+    }
+}

@@ -1,0 +1,416 @@
+//! The loop's state between two steps, and what one step does with the model's
+//! observation: the guards, the events, the milestones, the approach, a sample and a frame
+//! for the observers, and at the end the [`RunReport`]. Only the model's step is timed.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use crate::model::{BangEnd, Model, Observation, Phase};
+use crate::run::Observer;
+use crate::run::force_window::ForceWindow;
+use crate::run::frame::{Event, Frame, GhostDisc, GhostSpiral};
+use crate::run::guard::{self, Guard};
+use crate::run::limits::Applicability;
+use crate::run::milestones::Milestones;
+use crate::run::report::{Approach, BangReport, Ledger, RunReport};
+use crate::run::sample::{make_sample, set_forces};
+use crate::run::stop::{GuardTrip, StopReason};
+use crate::scene::Scene;
+use crate::theory::References;
+
+/// In the final bang, each sample's time since the release is at least this factor times
+/// the last one's (and at most one `output.sample_interval_s` later).
+const BANG_SAMPLE_GROWTH: f64 = 1.1;
+
+/// Points per turn of the exact-geometry ghost spiral.
+const GHOST_POINTS_PER_TURN: u32 = 32;
+
+/// The loop's state: the model, its references, and what the run has seen so far.
+pub(crate) struct Runner<'s> {
+    scene: &'s Scene,
+    refs: References,
+    model: Model,
+    initial: Observation,
+    e0: f64,
+    milestones: Milestones,
+    guard: Guard,
+    limits: Applicability,
+    approach: Approach,
+    /// The impulses on the tape, for each sample's mean forces.
+    window: ForceWindow,
+    /// Wall time of the engine steps (s), and of those up to the bang.
+    wall: f64,
+    wall_rolling: Option<f64>,
+    steps: u64,
+    prev: Option<Observation>,
+    /// Whether `prev` went out as a sample.
+    prev_logged: bool,
+    /// The contact-line speed, from the last rolling step (m/s).
+    xdot: f64,
+    next_sample: f64,
+    /// The release: its time and the last rolling step.
+    bang: Option<(f64, Observation)>,
+    max_gap: f64,
+    max_pen: f64,
+    frame_interval: f64,
+    next_frame: f64,
+}
+
+impl<'s> Runner<'s> {
+    /// Builds the model and the references, and opens the observers with the first frame
+    /// and the exact model's warning.
+    pub(crate) fn new(
+        scene: &'s Scene,
+        observers: &mut [&mut dyn Observer],
+    ) -> anyhow::Result<Self> {
+        let refs = References::new(scene);
+        let mut model = Model::new(scene);
+        for o in observers.iter_mut() {
+            o.observe_init(scene)?;
+        }
+        let initial = model.observe();
+        let e0 = initial.kinetic_j + initial.potential_j;
+        let frame_interval =
+            if scene.scene_rate_hz > 0.0 && observers.iter().any(|o| o.wants_frames()) {
+                1.0 / scene.scene_rate_hz
+            } else {
+                f64::INFINITY
+            };
+        let runner = Self {
+            scene,
+            milestones: Milestones::new(scene),
+            guard: Guard::new(scene, e0),
+            limits: Applicability::new(scene, &refs.exact),
+            approach: Approach {
+                peak_xdot_m_s: scene.push_speed_m_s,
+                peak_r_m: scene.tape.outer_radius_m,
+                peak_xdot_geo_m_s: (!refs.exact.is_sliding()).then_some(scene.push_speed_m_s),
+                exact_curve: Vec::new(),
+                eq7_curve: Vec::new(),
+            },
+            refs,
+            model,
+            initial,
+            e0,
+            window: ForceWindow::default(),
+            wall: 0.0,
+            wall_rolling: None,
+            steps: 0,
+            prev: None,
+            prev_logged: false,
+            xdot: scene.push_speed_m_s,
+            next_sample: 0.0,
+            bang: None,
+            max_gap: 0.0,
+            max_pen: 0.0,
+            frame_interval,
+            next_frame: frame_interval,
+        };
+        if frame_interval.is_finite() {
+            let frame = runner.frame(0.0, 0.0);
+            for o in observers.iter_mut() {
+                o.observe_frame(&frame)?;
+            }
+        }
+        if let Some(f) = runner.refs.exact.hop_onset_fraction() {
+            let event = Event::Warning {
+                t_s: 0.0,
+                message: format!(
+                    "the exact-geometry model needs a floor that pulls (N < 0) from laid fraction {f:.4} on"
+                ),
+            };
+            for o in observers.iter_mut() {
+                o.observe_event(&event)?;
+            }
+        }
+        Ok(runner)
+    }
+
+    /// Takes one step and feeds it to the observers; returns why the run ends if it does.
+    pub(crate) fn step(
+        &mut self,
+        observers: &mut [&mut dyn Observer],
+        stop: &AtomicBool,
+    ) -> anyhow::Result<Option<StopReason>> {
+        let start = Instant::now();
+        let obs = self.model.step();
+        self.wall += start.elapsed().as_secs_f64();
+        self.steps += 1;
+        let detached = self.prev.map_or(0, |p| p.detached) < obs.detached;
+        let impulses = &obs.impulses;
+        self.window
+            .push(obs.t_s, obs.dt_s, impulses, obs.laid_fraction, detached);
+        let health = self.model.health();
+        let tripped = self.guard.check(&obs, &health);
+        if let Some(trip) = tripped.as_ref()
+            && !guard::is_finite(&obs, &health)
+        {
+            // Keep the last finite step as the end of the run, logged: no NaN reaches a
+            // table.
+            if let (Some(p), false) = (self.prev, self.prev_logged) {
+                let sample = make_sample(&p, self.xdot, self.e0, &self.refs);
+                for o in observers.iter_mut() {
+                    o.observe_sample(&sample)?;
+                }
+            }
+            return Ok(Some(StopReason::Guard(trip.clone())));
+        }
+        self.max_gap = self.max_gap.max(obs.max_joint_gap_m);
+        self.max_pen = self.max_pen.max(obs.max_penetration_m);
+        let mut events = self.follow(&obs);
+        self.limits.observe(&obs, &health, self.xdot);
+        self.track_peak(&obs);
+        let timed_out = obs.t_s >= self.scene.stop.max_time_s;
+        let interrupted = stop.load(Ordering::Relaxed);
+        let ending = ending(self.scene, &obs, tripped, timed_out, interrupted);
+        if obs.phase == Phase::Done {
+            events.push(Event::BangEnd {
+                t_s: obs.t_s,
+                started_s: self.bang.map_or(obs.t_s, |(t, _)| t),
+                dissipated_j: obs.ledger.bang_j,
+                ended_by: obs.bang.end.unwrap_or(BangEnd::Cap),
+            });
+        }
+        if let Some(message) = ending.as_ref().and_then(early_end_warning) {
+            events.push(Event::Warning {
+                t_s: obs.t_s,
+                message,
+            });
+        }
+        for event in &events {
+            for o in observers.iter_mut() {
+                o.observe_event(event)?;
+            }
+        }
+        self.log(&obs, ending.is_some(), observers)?;
+        self.prev = Some(obs);
+        Ok(ending)
+    }
+
+    /// Follows the motion from the last step to `obs`: the contact-line speed, the
+    /// milestones crossed and the release; returns the detach and release events.
+    fn follow(&mut self, obs: &Observation) -> Vec<Event> {
+        let mut events = Vec::new();
+        let (detached_before, detach_j_before) = self
+            .prev
+            .map_or((0, 0.0), |p| (p.detached, p.ledger.detach_j));
+        if obs.detached > detached_before && obs.phase == Phase::Rolling {
+            events.push(Event::Detach {
+                t_s: obs.t_s,
+                first_link: detached_before,
+                links: obs.detached - detached_before,
+                detached: obs.detached,
+                energy_lost_j: obs.ledger.detach_j - detach_j_before,
+            });
+        }
+        let Some(p) = self.prev else {
+            return events;
+        };
+        if obs.phase == Phase::Rolling && obs.dt_s > 0.0 {
+            self.xdot = (obs.x_m - p.x_m) / obs.dt_s;
+        }
+        self.milestones.observe(&p, obs, self.xdot);
+        if p.phase == Phase::Rolling && obs.phase != Phase::Rolling {
+            self.bang = Some((p.t_s, p));
+            self.wall_rolling = Some(self.wall);
+            events.push(Event::BangStart {
+                t_s: p.t_s,
+                kinetic_j: p.kinetic_j,
+                available_j: p.kinetic_j + p.potential_j - self.model.flat_potential_j(),
+            });
+        }
+        events
+    }
+
+    /// The fastest contact line while rolling, with the exact model's speed there.
+    fn track_peak(&mut self, obs: &Observation) {
+        let a = &mut self.approach;
+        if obs.phase == Phase::Rolling && self.prev.is_some() && self.xdot > a.peak_xdot_m_s {
+            a.peak_xdot_m_s = self.xdot;
+            a.peak_r_m = self.scene.tape.outer_radius_m * (1.0 - obs.laid_fraction).max(0.0).sqrt();
+            a.peak_xdot_geo_m_s =
+                (!self.refs.exact.is_sliding()).then(|| self.refs.exact.xdot_at_psi(obs.psi_low));
+        }
+    }
+
+    /// Sends `obs` out as a sample when one is due (every `output.sample_interval_s`, at
+    /// the release, at the last step; in the bang at geometrically growing times), and as
+    /// a frame when one is due.
+    fn log(
+        &mut self,
+        obs: &Observation,
+        last_step: bool,
+        observers: &mut [&mut dyn Observer],
+    ) -> anyhow::Result<()> {
+        let rolling = obs.phase == Phase::Rolling;
+        let released = !rolling && self.prev.is_some_and(|p| p.phase == Phase::Rolling);
+        self.prev_logged = obs.t_s >= self.next_sample || last_step || released;
+        if self.prev_logged {
+            let mut sample = make_sample(obs, self.xdot, self.e0, &self.refs);
+            if let Some(mean) = self.window.sample(rolling) {
+                set_forces(&mut sample, &mean, rolling, &self.refs);
+            }
+            for o in observers.iter_mut() {
+                o.observe_sample(&sample)?;
+            }
+            self.next_sample = obs.t_s + self.scene.sample_interval_s;
+            // The bang is over in a few milliseconds of its start: sample it at times since
+            // the release growing geometrically from one step, up to the sample interval.
+            if let Some((t_bang, _)) = self.bang {
+                let since = obs.t_s - t_bang;
+                self.next_sample = self.next_sample.min(t_bang + since * BANG_SAMPLE_GROWTH);
+            }
+        }
+        if obs.t_s >= self.next_frame || (last_step && self.frame_interval.is_finite()) {
+            let frame = self.frame(obs.t_s, obs.x_m);
+            for o in observers.iter_mut() {
+                o.observe_frame(&frame)?;
+            }
+            let behind = ((obs.t_s - self.next_frame) / self.frame_interval + 1.0).floor();
+            self.next_frame += self.frame_interval * behind;
+        }
+        Ok(())
+    }
+
+    fn frame(&self, t_s: f64, contact_x_m: f64) -> Frame {
+        let (off_coil_m, on_coil_m) = self.model.link_nodes();
+        let b = self.scene.tape.thickness_m;
+        Frame {
+            t_s,
+            contact_x_m,
+            off_coil_m,
+            on_coil_m,
+            eq7: GhostDisc::at(&self.refs.continuum, b, t_s),
+            exact: GhostSpiral::at(&self.refs.exact, b, t_s, GHOST_POINTS_PER_TURN),
+        }
+    }
+
+    /// The report of the run, which ended for `stop`; the observers get it last.
+    pub(crate) fn finish(
+        mut self,
+        stop: StopReason,
+        observers: &mut [&mut dyn Observer],
+    ) -> anyhow::Result<RunReport> {
+        // A run stopped at its first step ends where it began.
+        let last = self.prev.unwrap_or(self.initial);
+        let ledger = self.ledger(&last);
+        self.approach.curves(self.scene, &self.refs);
+        let report = RunReport {
+            scene: self.scene.clone(),
+            links: self.model.link_count(),
+            steps: self.steps,
+            wall_time_s: self.wall,
+            wall_time_rolling_s: self.wall_rolling.unwrap_or(self.wall),
+            sim_time_s: last.t_s,
+            stop,
+            bounds: self.guard.bounds,
+            max_energy_rise_rel: self.guard.max_energy_rise_j / ledger.energy_scale_j,
+            max_spin_rad_s: self.guard.max_spin_rad_s,
+            reference_limits: self.limits.finish(),
+            milestones: self.milestones.finish(&self.refs, self.e0),
+            ledger,
+            approach: self.approach,
+            bang: self.bang.map(|_| BangReport {
+                kinetic_in_j: last.bang.kinetic_in_j,
+                top_speed_m_s: last.bang.top_speed_m_s,
+                duration_s: last.t_s - last.bang.started_s,
+                peak_floor_force_n: last.bang.peak_floor_force_n,
+                floor_impulse_n_s: last.bang.floor_impulse_n_s,
+                end_x_m: self.model.tape_end_x_m(),
+                laid_length_m: self.model.tape_length_m(),
+                still_moving_j: last.kinetic_j,
+                ended_by: last.bang.end,
+            }),
+            geo_hop_fraction: self.refs.exact.hop_onset_fraction(),
+            max_joint_gap_m: self.max_gap,
+            max_penetration_m: self.max_pen,
+        };
+        for o in observers.iter_mut() {
+            o.observe_final(&report)?;
+        }
+        Ok(report)
+    }
+
+    /// Where the energy went, with `last` the run's last step.
+    fn ledger(&self, last: &Observation) -> Ledger {
+        let flat = self.model.flat_potential_j();
+        let (bang_time, before, kinetic_into, available) = match self.bang {
+            Some((t, o)) => (
+                Some(t),
+                o.ledger,
+                last.bang.kinetic_in_j,
+                o.kinetic_j + o.potential_j - flat,
+            ),
+            None => (
+                None,
+                last.ledger,
+                last.kinetic_j,
+                last.kinetic_j + last.potential_j - flat,
+            ),
+        };
+        let t = &self.scene.tape;
+        let mgr_j = t.mass_kg * self.scene.g_m_s2 * t.outer_radius_m;
+        Ledger {
+            e0_j: self.e0,
+            mgr_j,
+            energy_scale_j: self.e0.abs().max(mgr_j).max(kinetic_into),
+            flat_potential_j: flat,
+            before_bang: before,
+            lost_before_bang_j: before.total_j(),
+            kinetic_into_bang_j: kinetic_into,
+            available_at_bang_j: available,
+            dissipated_by_bang_j: last.ledger.bang_j,
+            bang: last.bang.ledger,
+            left_j: last.kinetic_j + last.potential_j - flat,
+            bang_time_s: bang_time,
+        }
+    }
+}
+
+/// How this step ends the run, if it does: a guard first, then the bang's end, the time
+/// limit and an interruption.
+fn ending(
+    scene: &Scene,
+    obs: &Observation,
+    tripped: Option<GuardTrip>,
+    timed_out: bool,
+    interrupted: bool,
+) -> Option<StopReason> {
+    if let Some(trip) = tripped {
+        return Some(StopReason::Guard(trip));
+    }
+    if obs.phase == Phase::Done {
+        let still_moving = obs.kinetic_j / obs.bang.kinetic_in_j.max(f64::MIN_POSITIVE);
+        return Some(match obs.bang.end {
+            Some(BangEnd::Rest) => StopReason::AtRest {
+                t_s: obs.t_s,
+                still_moving,
+                rest_fraction: scene.stop.rest_fraction,
+            },
+            _ => StopReason::BangCap {
+                t_s: obs.t_s,
+                still_moving,
+                bang_cap_s: scene.stop.bang_cap_s,
+            },
+        });
+    }
+    if timed_out {
+        return Some(StopReason::MaxTime {
+            t_s: obs.t_s,
+            max_time_s: scene.stop.max_time_s,
+        });
+    }
+    interrupted.then_some(StopReason::Interrupted { t_s: obs.t_s })
+}
+
+/// The warning event of a run that ends before its bang does.
+fn early_end_warning(end: &StopReason) -> Option<String> {
+    match end {
+        StopReason::Guard(trip) => Some(format!("stopped by a guard: {trip}")),
+        StopReason::MaxTime { max_time_s, .. } => Some(format!(
+            "stop.max_time_s = {max_time_s} reached before the bang ended"
+        )),
+        StopReason::Interrupted { .. } => Some("interrupted: the run stopped early".into()),
+        StopReason::AtRest { .. } | StopReason::BangCap { .. } => None,
+    }
+}
