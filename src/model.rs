@@ -484,7 +484,6 @@ impl Model {
 
     fn far_node_psi(&self, k: usize) -> f64 {
         // Nodes step inward by one link angle from the outer end.
-        #[allow(clippy::cast_precision_loss)]
         let psi = self.spiral.psi_out - self.link_angle * (k + 1) as f64;
         psi.max(self.spiral.psi_in)
     }

@@ -8,6 +8,7 @@ pub mod compare;
 pub mod inspect;
 pub mod mcap;
 pub mod summary;
+pub mod table;
 
 pub use summary::summary;
 
@@ -82,7 +83,6 @@ pub const CSV_COLUMNS: [&str; 56] = [
 ];
 
 fn sample_values(s: &Sample) -> [f64; 56] {
-    #[allow(clippy::cast_precision_loss)]
     let bodies = s.active_bodies as f64;
     [
         s.t_s,

@@ -160,7 +160,6 @@ impl Spiral {
         let mut nodes = vec![self.psi_out];
         let mut k = 1u64;
         loop {
-            #[allow(clippy::cast_precision_loss)]
             let psi = self.psi_out - step * k as f64;
             if psi <= self.psi_in + 0.25 * step {
                 nodes.push(self.psi_in);
@@ -194,15 +193,12 @@ impl SpiralMoments {
     /// Tabulates the moments on panels of at most 0.25 rad.
     pub fn new(spiral: Spiral) -> Self {
         let span = spiral.psi_out - spiral.psi_in;
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
         let panels = ((span / 0.25).ceil() as usize).max(1);
-        #[allow(clippy::cast_precision_loss)]
         let step = span / panels as f64;
         let mut table = Vec::with_capacity(panels + 1);
         let mut acc = [0.0; 4];
         table.push(acc);
         for k in 0..panels {
-            #[allow(clippy::cast_precision_loss)]
             let lo = spiral.psi_in + step * k as f64;
             let add = Self::panel(&spiral, lo, lo + step);
             for (a, d) in acc.iter_mut().zip(add) {
@@ -231,10 +227,8 @@ impl SpiralMoments {
     /// `[length, first_x, first_y, second]` of the midline between `psi_in` and `psi`.
     pub fn at(&self, psi: f64) -> [f64; 4] {
         let psi = psi.clamp(self.spiral.psi_in, self.spiral.psi_out);
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
         let k =
             (((psi - self.spiral.psi_in) / self.step).floor() as usize).min(self.table.len() - 1);
-        #[allow(clippy::cast_precision_loss)]
         let lo = self.spiral.psi_in + self.step * k as f64;
         let base = self.table[k];
         if psi <= lo {

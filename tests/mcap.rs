@@ -94,9 +94,7 @@ fn read(path: &Path) -> Read {
 }
 
 fn ns(t_s: f64) -> u64 {
-    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-    let v = (t_s * 1e9).round() as u64;
-    v
+    (t_s * 1e9).round() as u64
 }
 
 #[test]
@@ -155,7 +153,6 @@ fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
     assert_eq!(stats.message_count, total as u64);
     let t_end = logged.report.sim_time_s;
     let frames_f = (t_end * logged.scene.scene_rate_hz).floor();
-    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
     let frames = frames_f as usize;
     let scene_n = r.messages["/scene"].len();
     assert!(

@@ -90,6 +90,35 @@ fn same_scene_gives_the_same_bytes() {
     );
 }
 
+/// FNV-1a, 64 bits: a hash that is the same on every platform and Rust release.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// The FNV-1a hash of the yoga mat's `samples.csv` at its defaults.
+const YOGA_SAMPLES_FNV1A: u64 = 0xc782_05d3_1eac_3d8a;
+
+#[test]
+fn the_yoga_mat_writes_the_samples_it_always_wrote() {
+    // Pins the behaviour across commits: a change of the physics, the step, the sampling
+    // or the CSV format changes these bytes.
+    let d = tempfile::tempdir().unwrap();
+    let mut csv = uncoil::output::CsvObserver::new(d.path());
+    run(&yoga_mat(), &mut [&mut csv]).unwrap();
+    let bytes = std::fs::read(d.path().join("samples.csv")).unwrap();
+    let hash = fnv1a(&bytes);
+    assert_eq!(
+        hash,
+        YOGA_SAMPLES_FNV1A,
+        "the yoga mat's samples.csv changed ({} bytes, FNV-1a {hash:#018x}). If the change is \
+         meant (new physics, a new column, a new format), set YOGA_SAMPLES_FNV1A in \
+         tests/sim.rs to {hash:#018x} and say why in the commit message.",
+        bytes.len()
+    );
+}
+
 fn thin_tape_with(edits: &[(&str, &str)]) -> Scene {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/thin-tape.toml");
     let mut text = std::fs::read_to_string(path).unwrap();

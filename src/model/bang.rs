@@ -169,7 +169,6 @@ impl Model {
         let floor: Vec<_> = contacts
             .iter()
             .filter_map(|&c| {
-                #[allow(clippy::cast_possible_truncation)]
                 let k = self.world.bodies.get(c.body)?.user_data as usize;
                 let i = self.free.binary_search_by_key(&k, |p| p.first).ok()?;
                 Some((i, c))

@@ -126,7 +126,6 @@ pub fn inventory(bytes: &[u8]) -> anyhow::Result<Inventory> {
     })
 }
 
-#[allow(clippy::cast_precision_loss)]
 fn secs(ns: u64) -> f64 {
     ns as f64 * 1e-9
 }

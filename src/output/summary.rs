@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use crate::output::compare::cell;
+use crate::output::compare::paradox;
 use crate::run::RunReport;
 use crate::run::stop::Status;
 use crate::theory::rivals::{Case, rivals};
@@ -58,31 +58,14 @@ fn coil_times(o: &mut String, report: &RunReport) {
 /// Any other case's times against the rivals the paper gives for it (`uncoil compare`'s
 /// table as plain text).
 fn rival_times(o: &mut String, report: &RunReport) {
-    let rv = rivals(&report.scene);
     let _ = writeln!(
         o,
         "Time to reach each laid fraction f, against the analyses of {} (the rival's time over the \
          simulation's, minus 1; * = the reference the simulation must converge to):",
         Case::of(&report.scene).section()
     );
-    let mut head = format!("  {:<6} {:>7} {:>9}", "", "f", "sim s");
-    for r in &rv {
-        let star = if r.valid { " *" } else { "" };
-        let _ = write!(head, " {:>22}", format!("{}{star} s", r.label));
-    }
-    let _ = writeln!(o, "{head}");
-    for m in &report.milestones {
-        let mut row = format!(
-            "  {:<6} {:>7.4} {:>9}",
-            m.label,
-            m.laid_fraction,
-            secs(m.t_sim_s)
-        );
-        for r in &rv {
-            let _ = write!(row, " {:>22}", cell(r, m.laid_fraction, m.t_sim_s));
-        }
-        let _ = writeln!(o, "{row}");
-    }
+    let rv = rivals(&report.scene);
+    o.push_str(&paradox(report, &rv).text("  "));
     for r in &rv {
         let _ = writeln!(o, "  {}: {}", r.label, r.description);
     }

@@ -157,7 +157,6 @@ mod tests {
         let mut w = ForceWindow::default();
         let mut worst: f64 = 0.0;
         for k in 1..=400 {
-            #[allow(clippy::cast_precision_loss)]
             let t = k as f64 * dt;
             let f = 1.0 + 3.0 * (2.0 * std::f64::consts::PI * (t - 0.5 * dt) / period).sin();
             let detached = k % 20 == 0;
