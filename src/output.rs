@@ -5,6 +5,7 @@
 //! module does no physics.
 
 pub mod compare;
+pub mod fields;
 pub mod inspect;
 pub mod mcap;
 pub mod summary;
@@ -12,136 +13,40 @@ pub mod table;
 
 pub use summary::summary;
 
-use std::fmt::Write as _;
 use std::fs::{self, File};
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::LazyLock;
 
 use anyhow::Context as _;
 
+use crate::output::fields::fields;
 use crate::run::{Observer, RunReport, Sample};
 use crate::scene::Scene;
 
-/// Column names of `samples.csv`, in order.
-pub const CSV_COLUMNS: [&str; 56] = [
-    "t_s",
-    "laid_fraction",
-    "r_m",
-    "x_m",
-    "xdot_m_s",
-    "omega_rad_s",
-    "kinetic_j",
-    "potential_j",
-    "dissipated_j",
-    "normal_n",
-    "friction_n",
-    "lost_step_j",
-    "lost_detach_j",
-    "lost_freeze_j",
-    "lost_bang_j",
-    "bang_floor_normal_j",
-    "bang_floor_friction_j",
-    "bang_joints_j",
-    "bang_freeze_j",
-    "bang_residual_j",
-    "r_ref_m",
-    "x_ref_m",
-    "xdot_ref_m_s",
-    "kinetic_ref_j",
-    "normal_ref_n",
-    "friction_ref_n",
-    "r_geo_m",
-    "x_geo_m",
-    "xdot_geo_m_s",
-    "kinetic_geo_j",
-    "r_ft_m",
-    "laid_fraction_ref",
-    "theta_rad",
-    "theta_ref_rad",
-    "n_tot_n",
-    "f_tot_n",
-    "n_floor_n",
-    "f_floor_n",
-    "n_int_n",
-    "f_int_n",
-    "n_tot_geo_n",
-    "f_tot_geo_n",
-    "f_floor_geo_n",
-    "f_int_geo_n",
-    "l_o",
-    "l_o_eq14",
-    "l_o_geo",
-    "dl_o_dt_n_m",
-    "tau_o_n_m",
-    "tau_o_eq16_n_m",
-    "tau_offcentre_n_m",
-    "n_tot_ref_n",
-    "f_tot_ref_n",
-    "active_bodies",
-    "max_joint_gap_m",
-    "max_penetration_m",
-];
+/// Column names of `samples.csv`, in order: the fields of [`Sample`] as serde names them
+/// (see [`fields`](crate::output::fields::fields)).
+pub static CSV_COLUMNS: LazyLock<Vec<&'static str>> = LazyLock::new(|| {
+    fields(&Sample::default())
+        .expect("a sample is a flat record of numbers")
+        .into_iter()
+        .map(|(name, _)| name)
+        .collect()
+});
 
-fn sample_values(s: &Sample) -> [f64; 56] {
-    let bodies = s.active_bodies as f64;
-    [
-        s.t_s,
-        s.laid_fraction,
-        s.r_m,
-        s.x_m,
-        s.xdot_m_s,
-        s.omega_rad_s,
-        s.kinetic_j,
-        s.potential_j,
-        s.dissipated_j,
-        s.normal_n,
-        s.friction_n,
-        s.lost_step_j,
-        s.lost_detach_j,
-        s.lost_freeze_j,
-        s.lost_bang_j,
-        s.bang_floor_normal_j,
-        s.bang_floor_friction_j,
-        s.bang_joints_j,
-        s.bang_freeze_j,
-        s.bang_residual_j,
-        s.r_ref_m,
-        s.x_ref_m,
-        s.xdot_ref_m_s,
-        s.kinetic_ref_j,
-        s.normal_ref_n,
-        s.friction_ref_n,
-        s.r_geo_m,
-        s.x_geo_m,
-        s.xdot_geo_m_s,
-        s.kinetic_geo_j,
-        s.r_ft_m,
-        s.laid_fraction_ref,
-        s.theta_rad,
-        s.theta_ref_rad,
-        s.n_tot_n,
-        s.f_tot_n,
-        s.n_floor_n,
-        s.f_floor_n,
-        s.n_int_n,
-        s.f_int_n,
-        s.n_tot_geo_n,
-        s.f_tot_geo_n,
-        s.f_floor_geo_n,
-        s.f_int_geo_n,
-        s.l_o,
-        s.l_o_eq14,
-        s.l_o_geo,
-        s.dl_o_dt_n_m,
-        s.tau_o_n_m,
-        s.tau_o_eq16_n_m,
-        s.tau_offcentre_n_m,
-        s.n_tot_ref_n,
-        s.f_tot_ref_n,
-        bodies,
-        s.max_joint_gap_m,
-        s.max_penetration_m,
-    ]
+/// A sample's cells in `samples.csv`: every number as `{:.9e}`, an empty cell where it is
+/// not finite (a reference past its end, a quantity its phase does not have).
+fn sample_cells(sample: &Sample) -> anyhow::Result<Vec<String>> {
+    Ok(fields(sample)?
+        .into_iter()
+        .map(|(_, v)| {
+            if v.is_finite() {
+                format!("{v:.9e}")
+            } else {
+                String::new()
+            }
+        })
+        .collect())
 }
 
 /// Writes `path` atomically: into `path.partial`, flushed to disk, then renamed.
@@ -179,7 +84,7 @@ fn partial_path(path: &Path) -> PathBuf {
 /// quantity that does not exist in a phase) is an empty cell, never `NaN`.
 pub struct CsvObserver {
     path: PathBuf,
-    out: Option<BufWriter<File>>,
+    out: Option<csv::Writer<File>>,
 }
 
 impl CsvObserver {
@@ -198,8 +103,8 @@ impl Observer for CsvObserver {
         let tmp = partial_path(&self.path);
         let file =
             File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
-        let mut out = BufWriter::new(file);
-        writeln!(out, "{}", CSV_COLUMNS.join(","))?;
+        let mut out = csv::Writer::from_writer(file);
+        out.write_record(CSV_COLUMNS.iter())?;
         self.out = Some(out);
         Ok(())
     }
@@ -208,16 +113,7 @@ impl Observer for CsvObserver {
         let Some(out) = self.out.as_mut() else {
             return Ok(());
         };
-        let mut line = String::with_capacity(400);
-        for (i, v) in sample_values(sample).iter().enumerate() {
-            if i > 0 {
-                line.push(',');
-            }
-            if v.is_finite() {
-                write!(line, "{v:.9e}")?;
-            }
-        }
-        writeln!(out, "{line}")?;
+        out.write_record(sample_cells(sample)?)?;
         Ok(())
     }
 

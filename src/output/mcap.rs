@@ -384,6 +384,36 @@ mod tests {
     }
 
     #[test]
+    fn schema_properties_match_the_sample_field_by_field() {
+        // The schema's properties, in the order its text lists them, are the sample's
+        // fields in declaration order; each has the type its value serialises to and a
+        // description.
+        let schema: serde_json::Value = serde_json::from_str(STATE_SCHEMA).unwrap();
+        let props = &schema["properties"];
+        let as_json = serde_json::to_value(Sample::default()).unwrap();
+        let mut last = 0;
+        for name in crate::output::CSV_COLUMNS.iter() {
+            let at = STATE_SCHEMA
+                .find(&format!("\"{name}\": {{"))
+                .unwrap_or_else(|| panic!("{name} is not a property of uncoil.State"));
+            assert!(at > last, "{name} is out of order in uncoil.State");
+            last = at;
+            let want = if as_json[name].is_u64() {
+                "integer"
+            } else {
+                "number"
+            };
+            assert_eq!(props[name]["type"], want, "{name}");
+            assert!(
+                props[name]["description"]
+                    .as_str()
+                    .is_some_and(|d| !d.is_empty()),
+                "{name} has no description"
+            );
+        }
+    }
+
+    #[test]
     fn vendored_scene_schema_is_foxglove_scene_update() {
         let schema: serde_json::Value = serde_json::from_str(SCENE_UPDATE_SCHEMA).unwrap();
         assert_eq!(schema["title"], "foxglove.SceneUpdate");

@@ -7,6 +7,7 @@ use std::path::Path;
 
 use crate::output::compare::paradox;
 use crate::run::RunReport;
+use crate::run::milestones::MilestoneKey;
 use crate::run::stop::Status;
 use crate::theory::rivals::{Case, rivals};
 
@@ -230,7 +231,7 @@ fn ledger_summary(o: &mut String, report: &RunReport) {
     if let Some(d) = report
         .milestones
         .iter()
-        .find(|m| m.label == "2b")
+        .find(|m| m.key == MilestoneKey::TwoB)
         .and_then(|m| m.dissipated_j)
     {
         let _ = writeln!(

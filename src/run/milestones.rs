@@ -2,6 +2,8 @@
 //! and 2b; a spool at laid fractions), when the simulation crossed each, and the
 //! references' times there.
 
+use std::fmt;
+
 use crate::model::Observation;
 use crate::run::report::Milestone;
 use crate::scene::Scene;
@@ -10,22 +12,44 @@ use crate::theory::References;
 /// Laid fractions of the milestones of a spool (a scene with a core).
 pub const SPOOL_FRACTIONS: [f64; 4] = [0.25, 0.5, 0.75, 0.9];
 
-/// The milestone radii of a scene with their labels.
-pub fn milestone_radii(scene: &Scene) -> Vec<(String, f64)> {
+/// Which milestone a time is taken at; its text is its label (`0.5R`, `2b`, `f=0.25`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MilestoneKey {
+    /// The equivalent radius at this fraction of the outer radius R (`0.5R`).
+    OfRadius(f64),
+    /// Two thicknesses, `r = 2b` (`2b`): the last milestone before the bang.
+    TwoB,
+    /// A spool's laid fraction (`f=0.25`).
+    Laid(f64),
+}
+
+impl fmt::Display for MilestoneKey {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let label = match self {
+            Self::OfRadius(k) => format!("{k}R"),
+            Self::TwoB => "2b".to_owned(),
+            Self::Laid(x) => format!("f={x}"),
+        };
+        f.pad(&label)
+    }
+}
+
+/// The milestone radii of a scene with their keys.
+pub fn milestone_radii(scene: &Scene) -> Vec<(MilestoneKey, f64)> {
     let big_r = scene.tape.outer_radius_m;
     if scene.tape.core_radius_m > 0.0 {
         // On a spool the radius hardly changes: milestones at laid fractions f, given as
         // the continuum-equivalent radius R sqrt(1 - f) the loop converts back.
         return SPOOL_FRACTIONS
             .iter()
-            .map(|f| (format!("f={f}"), big_r * (1.0 - f).sqrt()))
+            .map(|&f| (MilestoneKey::Laid(f), big_r * (1.0 - f).sqrt()))
             .collect();
     }
-    let mut v: Vec<(String, f64)> = [0.75, 0.5, 0.25, 0.1]
+    let mut v: Vec<(MilestoneKey, f64)> = [0.75, 0.5, 0.25, 0.1]
         .iter()
-        .map(|k| (format!("{k}R"), k * big_r))
+        .map(|&k| (MilestoneKey::OfRadius(k), k * big_r))
         .collect();
-    v.push(("2b".into(), 2.0 * scene.tape.thickness_m));
+    v.push((MilestoneKey::TwoB, 2.0 * scene.tape.thickness_m));
     v
 }
 
@@ -39,7 +63,7 @@ struct Hit {
 
 /// The milestones of a scene and when the run crossed them.
 pub(crate) struct Milestones {
-    radii: Vec<(String, f64)>,
+    radii: Vec<(MilestoneKey, f64)>,
     fractions: Vec<f64>,
     hits: Vec<Option<Hit>>,
 }
@@ -88,7 +112,8 @@ impl Milestones {
                 let t_sim = hit.as_ref().map(|h| h.t_s);
                 let rel = |a: Option<f64>, b: Option<f64>| a.zip(b).map(|(a, b)| a / b - 1.0);
                 Milestone {
-                    label: label.clone(),
+                    key: *label,
+                    label: label.to_string(),
                     r_m: *r,
                     laid_fraction: f,
                     t_sim_s: t_sim,

@@ -7,6 +7,7 @@ use serde::Serialize;
 use crate::model::{BangEnd, EnergyLedger};
 use crate::run::guard::Bounds;
 use crate::run::limits::ReferenceLimit;
+use crate::run::milestones::MilestoneKey;
 use crate::run::stop::StopReason;
 use crate::scene::Scene;
 use crate::theory::References;
@@ -14,7 +15,10 @@ use crate::theory::References;
 /// One milestone: the coil at a given continuum-equivalent radius.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Milestone {
-    /// Label, e.g. `0.5R` or `2b`.
+    /// Which milestone.
+    #[serde(skip)]
+    pub key: MilestoneKey,
+    /// Its label, e.g. `0.5R` or `2b` (the key's text).
     pub label: String,
     /// Equivalent radius (m).
     pub r_m: f64,

@@ -12,7 +12,7 @@ use crate::run::force_window::WindowMean;
 use crate::theory::References;
 
 /// One row of output: the simulation and its references at the same instant.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct Sample {
     /// Simulated time (s).
     pub t_s: f64,

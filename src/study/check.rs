@@ -213,7 +213,7 @@ pub fn csv_problems(text: &str) -> Vec<String> {
             ));
             continue;
         }
-        for (cell, column) in cells.iter().zip(CSV_COLUMNS) {
+        for (cell, column) in cells.iter().zip(CSV_COLUMNS.iter()) {
             if cell.is_empty() {
                 continue;
             }

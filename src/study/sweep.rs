@@ -20,6 +20,7 @@ use rayon::prelude::*;
 
 use crate::output::write_atomic;
 use crate::run::limits::LimitKind;
+use crate::run::milestones::MilestoneKey;
 use crate::run::stop::StopReason;
 use crate::run::{RunReport, milestone_radii, run};
 use crate::scene::overrides::{Override, OverrideSyntaxError, check_key, scene_with_overrides};
@@ -365,7 +366,7 @@ pub fn result_cells(report: &RunReport, jobs: usize) -> Vec<String> {
     c.push(opt(report
         .milestones
         .iter()
-        .find(|m| m.label == "2b")
+        .find(|m| m.key == MilestoneKey::TwoB)
         .and_then(|m| m.dissipated_j)
         .map(|d| d / l.e0_j)));
     c.push(num(report.max_energy_rise_rel));
@@ -668,7 +669,7 @@ impl Sweep {
         let path = dir.join(file_name(opts.shard));
         let labels: Vec<String> = milestone_radii(&self.scenes[0])
             .into_iter()
-            .map(|(l, _)| l)
+            .map(|(l, _)| l.to_string())
             .collect();
         let header = header(&self.keys, &labels);
         let mut file =
