@@ -4,13 +4,16 @@
 //! runs a loop and never writes a file. [`References`] is built once per scene and passed
 //! on to the run and its outputs.
 
+pub mod continuum;
+pub mod exact;
 pub mod forces;
-pub mod reference;
 pub mod rivals;
+mod trajectory;
 
 use crate::scene::Scene;
+use continuum::{Continuum, ForceTorque, Params};
+use exact::ExactGeometry;
 use forces::{ForceFn, force_reference};
-use reference::{Continuum, ExactGeometry, ForceTorque, Params};
 use rivals::{Rival, SpoolGeometry, rivals};
 
 /// The analytic references of a scene.

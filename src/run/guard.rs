@@ -12,7 +12,7 @@ use crate::model::{Health, Observation, Phase};
 use crate::run::stop::{GuardKind, GuardTrip};
 use crate::scene::Scene;
 use crate::spiral::Spiral;
-use crate::theory::reference::ExactGeometry;
+use crate::theory::exact::ExactGeometry;
 
 /// A run stops when its total energy rises above E0 by this fraction of the scene's energy
 /// scale, the largest of |E0|, M g R and, on a slope, M g sin(slope) L (what the whole tape

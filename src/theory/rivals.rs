@@ -3,8 +3,9 @@
 //! Pure `f64`, no engine types; this module neither simulates nor prints.
 //!
 //! Every rival is one degree of freedom. Those with a first integral are tabulated by the
-//! quadrature of the reference module's `Trajectory`; the two without one (eq. 62 and, through its closed linear
-//! first integral, eq. 68) are reduced to `w = q'^2` as a function of the coordinate.
+//! quadrature of the theory's `Trajectory` (`src/theory/trajectory.rs`); the two without
+//! one (eq. 62 and, through its closed linear first integral, eq. 68) are reduced to
+//! `w = q'^2` as a function of the coordinate.
 //! The common coordinate is the remaining mass fraction `q = 1 - f`, which falls from 1.
 
 use std::f64::consts::PI;
@@ -13,7 +14,8 @@ use serde::Serialize;
 
 use crate::scene::Scene;
 use crate::spiral::Spiral;
-use crate::theory::reference::{Continuum, ForceTorque, Params, Trajectory};
+use crate::theory::continuum::{Continuum, ForceTorque, Params};
+use crate::theory::trajectory::Trajectory;
 use crate::theory::{exact_geometry, params};
 
 /// Which of the paper's systems a scene is.
