@@ -5,6 +5,8 @@
 //! need a floor that pulls (its hop onset). Pure `f64`, no engine types; it does not
 //! simulate contact, and the paper's continuum equations are in [`continuum`](super::continuum).
 
+use std::sync::OnceLock;
+
 use serde::Serialize;
 
 use super::continuum::{Params, RefState};
@@ -47,6 +49,9 @@ pub struct ExactGeometry {
     /// Sliding: the conserved horizontal moment of [`Self::sliding_moment`] at the start.
     sliding_moment0: f64,
     traj: Trajectory,
+    /// [`Self::hop_onset_fraction`], scanned on its first call and kept: the run, its
+    /// guard and its report all ask for it.
+    hop_onset: OnceLock<Option<f64>>,
 }
 
 /// The exact-geometry model's constraint forces at one instant (N, up and +x positive).
@@ -135,6 +140,7 @@ impl ExactGeometry {
             energy_j: 0.0,
             sliding_moment0: 0.0,
             traj: Trajectory::empty(spiral.psi_out),
+            hop_onset: OnceLock::new(),
         };
         let psi0 = spiral.psi_out;
         let psidot0 = p.push_speed_m_s / (spiral.a_m * (1.0 + psi0 * psi0).sqrt());
@@ -413,8 +419,14 @@ impl ExactGeometry {
     }
 
     /// The first laid fraction at which the rolling spiral would need a floor that pulls
-    /// (`N < 0`), scanning the tabulated motion; `None` if it never does.
+    /// (`N < 0`), scanning the tabulated motion; `None` if it never does. The scan runs
+    /// once, on the first call; later calls return its result.
     pub fn hop_onset_fraction(&self) -> Option<f64> {
+        *self.hop_onset.get_or_init(|| self.scan_hop_onset())
+    }
+
+    /// The scan of [`Self::hop_onset_fraction`]: 20,000 steps of `psi` over the table.
+    fn scan_hop_onset(&self) -> Option<f64> {
         let (start, end) = (self.spiral.psi_out, self.traj.q_end());
         let n = 20_000;
         (1..n).find_map(|k| {
@@ -576,5 +588,8 @@ mod tests {
             .hop_onset_fraction()
             .expect("the yoga mat needs N < 0 near the end");
         assert!(f > 0.9, "hop onset at f = {f}");
+        // Scanned once: the result is kept and handed back on the next call.
+        assert_eq!(e.hop_onset.get(), Some(&Some(f)));
+        assert_eq!(e.hop_onset_fraction(), Some(f));
     }
 }
