@@ -12,12 +12,14 @@
 //! cases (level, g = 0, slope, frictionless); the spool cases are in `rivals/spool.rs`.
 
 use std::f64::consts::PI;
+use std::rc::Rc;
 
 use serde::Serialize;
 
 use crate::scene::Scene;
 use crate::spiral::Spiral;
 use crate::theory::continuum::{Continuum, ForceTorque, Params};
+use crate::theory::exact::ExactGeometry;
 use crate::theory::trajectory::Trajectory;
 use crate::theory::{exact_geometry, params};
 
@@ -224,10 +226,9 @@ fn closed(
     }
 }
 
-/// The exact-geometry model of the scene's spiral (on its slope), as a rival.
-fn exact(scene: &Scene, valid: bool) -> Rival {
-    let e = std::rc::Rc::new(exact_geometry(scene));
-    let inverse = std::rc::Rc::clone(&e);
+/// The exact-geometry model of the scene's spiral (on its slope), as a rival sharing it.
+fn exact(e: Rc<ExactGeometry>, valid: bool) -> Rival {
+    let inverse = Rc::clone(&e);
     let mut rival = closed(
         "exact",
         "exact geometry: the rigid spiral the links form, rolling on its midline (sliding at \
@@ -241,32 +242,39 @@ fn exact(scene: &Scene, valid: bool) -> Rival {
     rival
 }
 
-/// All rivals of a scene, the valid reference first.
+/// All rivals of a scene, the valid reference first. Every case but the fixed axis
+/// tabulates the scene's exact-geometry model for its `exact` rival.
 pub fn rivals(scene: &Scene) -> Vec<Rival> {
+    rivals_from(scene, || Rc::new(exact_geometry(scene)))
+}
+
+/// As [`rivals`], with the scene's exact-geometry model (the one [`exact_geometry`] builds)
+/// already tabulated: the `exact` rival shares it instead of tabulating its own.
+pub fn rivals_with(scene: &Scene, model: &Rc<ExactGeometry>) -> Vec<Rival> {
+    rivals_from(scene, || Rc::clone(model))
+}
+
+/// The rivals of the scene's case, taking the exact-geometry model from `model` only for a
+/// case that has an `exact` rival.
+fn rivals_from(scene: &Scene, model: impl FnOnce() -> Rc<ExactGeometry>) -> Vec<Rival> {
     let p = params(scene);
     match Case::of(scene) {
-        Case::Coil | Case::ZeroG => coil_rivals(scene, p),
-        Case::Slope => slope_rivals(scene, p),
-        Case::SingleTurn => single_turn_rivals(scene),
-        Case::Spool => spool_rivals(scene),
-        Case::FrictionlessSpool => frictionless_spool_rivals(scene),
-        Case::FrictionlessCoil => frictionless_coil_rivals(scene, p),
+        Case::Coil | Case::ZeroG => coil_rivals(scene, p, model()),
+        Case::Slope => slope_rivals(scene, p, model()),
+        Case::SingleTurn => single_turn_rivals(scene, model()),
+        Case::Spool => spool_rivals(scene, model()),
+        Case::FrictionlessSpool => frictionless_spool_rivals(scene, model()),
+        Case::FrictionlessCoil => frictionless_coil_rivals(scene, p, model()),
         Case::Vertical => vertical_rivals(scene),
     }
 }
 
-fn coil_rivals(scene: &Scene, p: Params) -> Vec<Rival> {
+fn coil_rivals(scene: &Scene, p: Params, model: Rc<ExactGeometry>) -> Vec<Rival> {
     let big_r = p.outer_radius_m;
-    let c = Continuum::new(p, 0.5 * scene.stop.bang_radius_m);
     let ft = ForceTorque::new(p);
     vec![
-        exact(scene, true),
-        closed(
-            "eq.7",
-            "eq. (7), energy, continuum disc; integral (5)-(6) corrected per ERRATA A1-A2",
-            false,
-            move |f| c.time_at_radius(big_r * (1.0 - f).max(0.0).sqrt()),
-        ),
+        exact(model, true),
+        eq7_rival(scene, p),
         closed(
             "eq.17",
             "eq. (17), force/torque about the origin, no g; closed form ERRATA C2",
@@ -274,6 +282,18 @@ fn coil_rivals(scene: &Scene, p: Params) -> Vec<Rival> {
             move |f| Some(ft.time_at_radius(big_r * (1.0 - f).max(0.0).sqrt())),
         ),
     ]
+}
+
+/// Eq. (7) as a rival, tabulated to half the bang radius.
+fn eq7_rival(scene: &Scene, p: Params) -> Rival {
+    let big_r = p.outer_radius_m;
+    let c = Continuum::new(p, 0.5 * scene.stop.bang_radius_m);
+    closed(
+        "eq.7",
+        "eq. (7), energy, continuum disc; integral (5)-(6) corrected per ERRATA A1-A2",
+        false,
+        move |f| c.time_at_radius(big_r * (1.0 - f).max(0.0).sqrt()),
+    )
 }
 
 /// `|r'|` turned into the rate of `q = r^2 / R^2`.
@@ -337,11 +357,11 @@ fn torque_form_rdot(p: Params, slope_rad: f64, k: f64) -> impl Fn(f64) -> f64 {
     }
 }
 
-fn slope_rivals(scene: &Scene, p: Params) -> Vec<Rival> {
+fn slope_rivals(scene: &Scene, p: Params, model: Rc<ExactGeometry>) -> Vec<Rival> {
     let a = scene.slope_deg.to_radians();
     let big_r = p.outer_radius_m;
     vec![
-        exact(scene, true),
+        exact(model, true),
         from_rate(
             "eq.72 A11",
             "eq. (72) with 2 pi g b r^2 sin(a) (ERRATA A11), energy integral (70)",
@@ -418,7 +438,7 @@ fn frictionless_coil_inertia(p: Params, r: f64) -> f64 {
     0.5 * flat * v_flat * v_flat + 0.5 * mc * (v_x * v_x + 1.0) + 0.25 * mc * r * r * omega * omega
 }
 
-fn frictionless_coil_rivals(scene: &Scene, p: Params) -> Vec<Rival> {
+fn frictionless_coil_rivals(scene: &Scene, p: Params, model: Rc<ExactGeometry>) -> Vec<Rival> {
     let big_r = p.outer_radius_m;
     let (b, m, g) = (p.thickness_m, p.mass_kg, p.g_m_s2);
     // Started spinning in place: surface speed r omega0 = push.
@@ -428,10 +448,10 @@ fn frictionless_coil_rivals(scene: &Scene, p: Params) -> Vec<Rival> {
         let v = m * g * r.powi(3) / (big_r * big_r);
         ((e0 - v) / frictionless_coil_inertia(p, r)).sqrt()
     };
-    let mut with_friction = coil_rivals(scene, p).swap_remove(1);
+    let mut with_friction = eq7_rival(scene, p);
     with_friction.label.push_str(" (friction)");
     vec![
-        exact(scene, true),
+        exact(model, true),
         from_rate(
             "A19-A20",
             "frictionless coil, zero momentum with the flat tape's material velocity \

@@ -5,9 +5,11 @@
 //! machinery, the solid coil's cases and the choice of case are in [`rivals`](super).
 
 use std::f64::consts::PI;
+use std::rc::Rc;
 
 use super::{Case, F_END, Rival, SpoolGeometry, closed, exact, from_rate, table_spin, tabulate_w};
 use crate::scene::Scene;
+use crate::theory::exact::ExactGeometry;
 
 /// Eq. (45) through its energy integral (43), App. A:
 /// ```text
@@ -91,7 +93,7 @@ pub(super) fn vertical_rivals(scene: &Scene) -> Vec<Rival> {
     ]
 }
 
-pub(super) fn single_turn_rivals(scene: &Scene) -> Vec<Rival> {
+pub(super) fn single_turn_rivals(scene: &Scene, model: Rc<ExactGeometry>) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
     let (r, g, w0) = (sg.r_m, scene.g_m_s2, sg.spin0_rad_s);
     let spin = single_turn_spin(r, g, w0);
@@ -106,7 +108,7 @@ pub(super) fn single_turn_rivals(scene: &Scene) -> Vec<Rival> {
             true,
             move |q| spin(2.0 * PI * (1.0 - q)) / (2.0 * PI),
         ),
-        exact(scene, false),
+        exact(model, false),
         from_rate(
             "eq.62 A8",
             "eq. (62), footnote 15's variable-mass Lagrangian, corrected per ERRATA A8",
@@ -161,21 +163,12 @@ pub fn spool_time_from_rest(r: f64, l: f64, g: f64, u: f64) -> f64 {
     l / r * (r / g).sqrt() * ((u * (1.0 - u)).sqrt() + u.sqrt().asin())
 }
 
-pub(super) fn spool_rivals(scene: &Scene) -> Vec<Rival> {
+pub(super) fn spool_rivals(scene: &Scene, model: Rc<ExactGeometry>) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
     let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.g_m_s2, sg.spin0_rad_s);
-    let rate = spool_rate(r, l, g, w0);
     vec![
-        exact(scene, true),
-        from_rate(
-            "eq.79",
-            "eq. (79), energy (78) = variable-mass Lagrangian (99); integral per ERRATA A15. \
-             It centres the wound tape on the axis; the spiral's outer partial turn is off it \
-             between whole turns and speeds the near-rest start: the spins agree after every \
-             whole turn (table below), the times keep the first turn's lead",
-            false,
-            move |q| rate(1.0 - q),
-        ),
+        exact(model, true),
+        eq79_rival(scene),
         closed(
             "A14 rest",
             "closed form of (81) from rest corrected per ERRATA A14 (factor l/r)",
@@ -197,6 +190,22 @@ pub(super) fn spool_rivals(scene: &Scene) -> Vec<Rival> {
     ]
 }
 
+/// Eq. (79) as a rival, through its energy integral (78) per ERRATA A15.
+fn eq79_rival(scene: &Scene) -> Rival {
+    let sg = SpoolGeometry::of(scene);
+    let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.g_m_s2, sg.spin0_rad_s);
+    let rate = spool_rate(r, l, g, w0);
+    from_rate(
+        "eq.79",
+        "eq. (79), energy (78) = variable-mass Lagrangian (99); integral per ERRATA A15. \
+         It centres the wound tape on the axis; the spiral's outer partial turn is off it \
+         between whole turns and speeds the near-rest start: the spins agree after every \
+         whole turn (table below), the times keep the first turn's lead",
+        false,
+        move |q| rate(1.0 - q),
+    )
+}
+
 /// App. D with the flat tape at its material velocity (ERRATA A18):
 /// `theta'^2 (1 - u^2) = theta0'^2 + 2 g theta / l`, `u = r theta / l`. Returns `theta'(theta)`.
 fn a18_spin(r: f64, l: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 {
@@ -214,11 +223,11 @@ fn eq104_spin(r: f64, l: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 {
     }
 }
 
-pub(super) fn frictionless_spool_rivals(scene: &Scene) -> Vec<Rival> {
+pub(super) fn frictionless_spool_rivals(scene: &Scene, model: Rc<ExactGeometry>) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
     let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.g_m_s2, sg.spin0_rad_s);
     vec![
-        exact(scene, true),
+        exact(model, true),
         from_rate(
             "A18",
             "App. D with the material velocity of the flat tape (ERRATA A18): \
@@ -239,7 +248,7 @@ pub(super) fn frictionless_spool_rivals(scene: &Scene) -> Vec<Rival> {
                 move |q| r / l * spin((1.0 - q) * l / r)
             },
         ),
-        spool_rivals(scene).swap_remove(1).for_contrast(),
+        eq79_rival(scene).for_contrast(),
     ]
 }
 
