@@ -4,14 +4,19 @@
 //! runs a loop and never writes a file. [`References`] is built once per scene and passed
 //! on to the run and its outputs.
 
+pub mod continuum;
+pub mod exact;
 pub mod forces;
-pub mod reference;
 pub mod rivals;
+mod trajectory;
+
+use std::rc::Rc;
 
 use crate::scene::Scene;
+use continuum::{Continuum, ForceTorque, Params};
+use exact::ExactGeometry;
 use forces::{ForceFn, force_reference};
-use reference::{Continuum, ExactGeometry, ForceTorque, Params};
-use rivals::{Rival, SpoolGeometry, rivals};
+use rivals::{Rival, SpoolGeometry, rivals_with};
 
 /// The analytic references of a scene.
 pub struct References {
@@ -19,8 +24,8 @@ pub struct References {
     pub continuum: Continuum,
     /// Eq. (17).
     pub force_torque: ForceTorque,
-    /// The exact-geometry model.
-    pub exact: ExactGeometry,
+    /// The exact-geometry model, tabulated once and shared with the exact rival.
+    pub exact: Rc<ExactGeometry>,
     /// The scene's valid reference among the paper's rivals, if it has one.
     pub valid: Option<Rival>,
     /// The case's analytic constraint forces.
@@ -37,11 +42,12 @@ impl References {
     pub fn new(scene: &Scene) -> Self {
         let p = params(scene);
         let r_end = 0.5 * scene.stop.bang_radius_m;
+        let exact = Rc::new(exact_geometry(scene));
         Self {
             continuum: Continuum::new(p, r_end),
             force_torque: ForceTorque::new(p),
-            exact: exact_geometry(scene),
-            valid: rivals(scene).into_iter().find(|r| r.valid),
+            valid: rivals_with(scene, &exact).into_iter().find(|r| r.valid),
+            exact,
             forces: force_reference(scene),
             theta_per_fraction: (scene.tape.core_radius_m > 0.0).then(|| {
                 let sg = SpoolGeometry::of(scene);

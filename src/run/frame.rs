@@ -7,7 +7,7 @@ use std::f64::consts::PI;
 
 use serde::Serialize;
 
-use crate::theory::reference::{Continuum, ExactGeometry};
+use crate::theory::{continuum::Continuum, exact::ExactGeometry};
 
 /// The coil of eq. (7) drawn as a disc: eq. (7) knows only its radius and its contact
 /// position, and rolling without slip fixes its rotation.
@@ -161,7 +161,7 @@ impl Event {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::theory::reference::Params;
+    use crate::theory::continuum::Params;
 
     fn params() -> Params {
         Params {

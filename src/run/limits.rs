@@ -9,7 +9,7 @@ use crate::model::{Health, Observation, Phase};
 use crate::run::guard::tape_length_m;
 use crate::scene::Scene;
 use crate::spiral::Spiral;
-use crate::theory::reference::ExactGeometry;
+use crate::theory::exact::ExactGeometry;
 
 /// The rolling contact slips when the coil's material point there moves faster than this
 /// fraction of the contact-line speed (or of the push speed, if larger).

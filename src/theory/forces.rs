@@ -10,8 +10,8 @@
 use std::f64::consts::PI;
 
 use crate::scene::Scene;
+use crate::theory::continuum::Continuum;
 use crate::theory::params;
-use crate::theory::reference::Continuum;
 use crate::theory::rivals::{Case, SpoolGeometry, single_turn_spin, slope_energy_rdot, spool_rate};
 
 /// `(N_tot, F_tot)` in N at a laid fraction, `None` where the reference does not exist.
