@@ -224,6 +224,20 @@ impl SpiralMoments {
         out
     }
 
+    /// The midline's length between `psi_in` and `psi`: [`Self::at`]`(psi)[0]`, bit for bit,
+    /// without the three moments' quadratures.
+    pub fn length_at(&self, psi: f64) -> f64 {
+        let psi = psi.clamp(self.spiral.psi_in, self.spiral.psi_out);
+        let k =
+            (((psi - self.spiral.psi_in) / self.step).floor() as usize).min(self.table.len() - 1);
+        let lo = self.spiral.psi_in + self.step * k as f64;
+        let base = self.table[k][0];
+        if psi <= lo {
+            return base;
+        }
+        base + self.spiral.arc(lo, psi)
+    }
+
     /// `[length, first_x, first_y, second]` of the midline between `psi_in` and `psi`.
     pub fn at(&self, psi: f64) -> [f64; 4] {
         let psi = psi.clamp(self.spiral.psi_in, self.spiral.psi_out);
@@ -251,6 +265,20 @@ mod tests {
 
     fn yoga() -> Spiral {
         Spiral::wound(0.06, 0.005, 0.0)
+    }
+
+    #[test]
+    fn length_at_is_the_first_moment_bit_for_bit() {
+        let m = SpiralMoments::new(yoga());
+        let s = yoga();
+        for k in 0..=200 {
+            let psi = s.psi_in + (s.psi_out - s.psi_in) * f64::from(k) / 200.0;
+            assert_eq!(
+                m.length_at(psi).to_bits(),
+                m.at(psi)[0].to_bits(),
+                "psi = {psi}"
+            );
+        }
     }
 
     #[test]

@@ -224,14 +224,18 @@ impl ExactGeometry {
 
     /// Laid mass fraction when the lowest point is at `psi`.
     pub fn laid_fraction(&self, psi: f64) -> f64 {
-        1.0 - self.moments.at(psi)[0] / self.spiral.length()
+        1.0 - self.moments.length_at(psi) / self.spiral.length()
     }
 
-    /// The spiral parameter of the lowest point at laid fraction `f` (bisection).
+    /// The spiral parameter of the lowest point at laid fraction `f` (bisection, to the
+    /// last bit: it stops once the midpoint is one of the ends).
     pub fn psi_at_fraction(&self, f: f64) -> f64 {
         let (mut lo, mut hi) = (self.spiral.psi_in, self.spiral.psi_out);
         for _ in 0..100 {
             let mid = 0.5 * (lo + hi);
+            if mid == lo || mid == hi {
+                break;
+            }
             if self.laid_fraction(mid) > f {
                 lo = mid;
             } else {
