@@ -16,7 +16,9 @@ pub mod stop;
 use std::sync::atomic::AtomicBool;
 
 pub use milestones::{SPOOL_FRACTIONS, milestone_radii};
-pub use report::{Approach, BANG_SPLIT_MIN_OF_SCALE, BangReport, Ledger, Milestone, RunReport};
+pub use report::{
+    Approach, BANG_SPLIT_MIN_OF_SCALE, BangReport, Ledger, Milestone, RivalTimes, RunReport,
+};
 pub use sample::Sample;
 
 use crate::run::frame::{Event, Frame};

@@ -26,8 +26,8 @@ pub struct References {
     pub force_torque: ForceTorque,
     /// The exact-geometry model, tabulated once and shared with the exact rival.
     pub exact: Rc<ExactGeometry>,
-    /// The scene's valid reference among the paper's rivals, if it has one.
-    pub valid: Option<Rival>,
+    /// The paper's rivals for the scene's case; at most one is the valid reference.
+    pub rivals: Vec<Rival>,
     /// The case's analytic constraint forces.
     pub forces: Option<ForceFn>,
     /// Spools: `l / r`, the angle of the whole tape (rad).
@@ -38,6 +38,11 @@ pub struct References {
 }
 
 impl References {
+    /// The scene's valid reference among the rivals, if it has one.
+    pub fn valid(&self) -> Option<&Rival> {
+        self.rivals.iter().find(|r| r.valid)
+    }
+
     /// Builds and tabulates the references for a scene, down to half the bang radius.
     pub fn new(scene: &Scene) -> Self {
         let p = params(scene);
@@ -46,7 +51,7 @@ impl References {
         Self {
             continuum: Continuum::new(p, r_end),
             force_torque: ForceTorque::new(p),
-            valid: rivals_with(scene, &exact).into_iter().find(|r| r.valid),
+            rivals: rivals_with(scene, &exact),
             exact,
             forces: force_reference(scene),
             theta_per_fraction: (scene.tape.core_radius_m > 0.0).then(|| {

@@ -10,9 +10,9 @@ mod forces;
 pub use forces::{force_table, sim_sign_change, torque_table, window_mean, window_spread};
 
 use crate::output::table::Table;
-use crate::run::{Observer, RunReport, Sample};
+use crate::run::{Observer, RivalTimes, RunReport, Sample};
 use crate::scene::Scene;
-use crate::theory::rivals::{Case, Rival, SpoolGeometry, rivals, spool_spins};
+use crate::theory::rivals::{Case, SpoolGeometry, spool_spins};
 
 /// Keeps the samples of a run, for the force table.
 #[derive(Debug, Default)]
@@ -100,9 +100,10 @@ fn rel(t: Option<f64>, t_sim: Option<f64>) -> String {
     }
 }
 
-/// One rival's time at `f` with its difference to the simulation, or why it has none.
-pub fn cell(rival: &Rival, f: f64, t_sim: Option<f64>) -> String {
-    match rival.time_at_fraction(f) {
+/// One rival's time `t` at the laid fraction `f` with its difference to the
+/// simulation's, or why it has none.
+pub fn cell(rival: &RivalTimes, t: Option<f64>, f: f64, t_sim: Option<f64>) -> String {
+    match t {
         Some(t) => format!("{t:.4} ({})", rel(Some(t), t_sim)),
         None => match rival.stall_fraction {
             Some(s) if f > s => format!("stops at f={s:.4}"),
@@ -114,20 +115,24 @@ pub fn cell(rival: &Rival, f: f64, t_sim: Option<f64>) -> String {
 /// The paradox table of a run: each milestone's time in the simulation and in every rival
 /// the paper gives for its case, with the rival's time over the simulation's minus 1; `*`
 /// marks the reference the simulation must converge to.
-pub fn paradox(report: &RunReport, rv: &[Rival]) -> Table {
+pub fn paradox(report: &RunReport) -> Table {
+    let rv = &report.rivals;
     let mut table = Table::new(["milestone", "f", "sim s"]);
     table.header.extend(
         rv.iter()
             .map(|r| format!("{}{} s", r.label, if r.valid { " *" } else { "" })),
     );
-    for m in &report.milestones {
+    for (k, m) in report.milestones.iter().enumerate() {
         let mut row = vec![
             m.label.clone(),
             format!("{:.4}", m.laid_fraction),
             m.t_sim_s
                 .map_or("not reached".into(), |t| format!("{t:.4}")),
         ];
-        row.extend(rv.iter().map(|r| cell(r, m.laid_fraction, m.t_sim_s)));
+        row.extend(
+            rv.iter()
+                .map(|r| cell(r, r.t_s[k], m.laid_fraction, m.t_sim_s)),
+        );
         table.push(row);
     }
     table
@@ -137,7 +142,7 @@ pub fn paradox(report: &RunReport, rv: &[Rival]) -> Table {
 pub fn table(report: &RunReport, samples: &[Sample]) -> String {
     let scene = &report.scene;
     let case = Case::of(scene);
-    let rv = rivals(scene);
+    let rv = &report.rivals;
     let mut o = String::new();
     let _ = writeln!(
         o,
@@ -152,14 +157,14 @@ pub fn table(report: &RunReport, samples: &[Sample]) -> String {
         scene.slope_deg,
         scene.g_m_s2,
     );
-    o.push_str(&paradox(report, &rv).markdown());
+    o.push_str(&paradox(report).markdown());
     let _ = writeln!(o);
     let _ = writeln!(
         o,
         "Percentages: the rival's time over the simulation's, minus 1. * = the reference the \
          simulation must converge to."
     );
-    for r in &rv {
+    for r in rv {
         let _ = writeln!(o, "- `{}`: {}", r.label, r.description);
     }
     let l = &report.ledger;

@@ -9,7 +9,7 @@ use crate::output::compare::paradox;
 use crate::run::RunReport;
 use crate::run::milestones::MilestoneKey;
 use crate::run::stop::Status;
-use crate::theory::rivals::{Case, rivals};
+use crate::theory::rivals::Case;
 
 fn pct(v: Option<f64>) -> String {
     v.map_or_else(|| "-".into(), |v| format!("{:+.2}%", 100.0 * v))
@@ -65,9 +65,8 @@ fn rival_times(o: &mut String, report: &RunReport) {
          simulation's, minus 1; * = the reference the simulation must converge to):",
         Case::of(&report.scene).section()
     );
-    let rv = rivals(&report.scene);
-    o.push_str(&paradox(report, &rv).text("  "));
-    for r in &rv {
+    o.push_str(&paradox(report).text("  "));
+    for r in &report.rivals {
         let _ = writeln!(o, "  {}: {}", r.label, r.description);
     }
 }

@@ -5,7 +5,7 @@
 use std::fmt;
 
 use crate::model::Observation;
-use crate::run::report::Milestone;
+use crate::run::report::{Milestone, RivalTimes};
 use crate::scene::Scene;
 use crate::theory::References;
 
@@ -98,6 +98,24 @@ impl Milestones {
                 });
             }
         }
+    }
+
+    /// Each of the paper's rivals for the case, timed at the milestones' laid fractions.
+    pub(crate) fn rivals(&self, refs: &References) -> Vec<RivalTimes> {
+        refs.rivals
+            .iter()
+            .map(|r| RivalTimes {
+                label: r.label.clone(),
+                description: r.description.clone(),
+                valid: r.valid,
+                stall_fraction: r.stall_fraction,
+                t_s: self
+                    .fractions
+                    .iter()
+                    .map(|&f| r.time_at_fraction(f))
+                    .collect(),
+            })
+            .collect()
     }
 
     /// Each milestone with the simulation's time beside the references'.

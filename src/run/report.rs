@@ -166,6 +166,24 @@ impl Approach {
     }
 }
 
+/// One of the paper's rivals for the scene's case at the run's milestones: the theory's
+/// verdict, computed once with the run's references and carried to the tables.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RivalTimes {
+    /// Short column label, e.g. `eq.72 A11`.
+    pub label: String,
+    /// What it is, with the equation numbers and ERRATA ids.
+    pub description: String,
+    /// The reference the simulation must converge to.
+    pub valid: bool,
+    /// Laid fraction at which this motion stops, if it does (left out if it does not).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stall_fraction: Option<f64>,
+    /// Its time to each milestone's laid fraction (s), in the milestones' order; `None`
+    /// where it never gets there.
+    pub t_s: Vec<Option<f64>>,
+}
+
 /// Everything a run produced, for JSON and the summary.
 #[derive(Debug, Clone, Serialize)]
 pub struct RunReport {
@@ -194,6 +212,8 @@ pub struct RunReport {
     pub reference_limits: Vec<ReferenceLimit>,
     /// Milestones at 0.75R, 0.5R, 0.25R, 0.1R and 2b (a spool: at laid fractions 0.25 to 0.9).
     pub milestones: Vec<Milestone>,
+    /// The paper's rivals for the case, timed at the milestones.
+    pub rivals: Vec<RivalTimes>,
     /// The energy ledger.
     pub ledger: Ledger,
     /// The approach to the bang: the peak contact-line speed.

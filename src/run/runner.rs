@@ -308,6 +308,7 @@ impl<'s> Runner<'s> {
             max_spin_rad_s: self.guard.max_spin_rad_s,
             reference_limits: self.limits.finish(),
             milestones: self.milestones.finish(&self.refs, self.e0),
+            rivals: self.milestones.rivals(&self.refs),
             ledger,
             approach: self.approach,
             bang: self.bang.map(|_| BangReport {

@@ -196,8 +196,7 @@ pub(crate) fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &Referenc
     let g = refs.exact.state_at_time(obs.t_s);
     let r_ref = c.map_or(nan, |s| s.r_m);
     let f_ref = refs
-        .valid
-        .as_ref()
+        .valid()
         .and_then(|r| r.fraction_at_time(obs.t_s))
         .unwrap_or(nan);
     let forces = refs.forces.as_ref().and_then(|f| f(obs.laid_fraction));

@@ -159,8 +159,9 @@ pub fn verify_outputs(dir: &Path) -> Vec<String> {
 
 /// Collects the paths of `null`s in a report that are not an absent optional value:
 /// serde writes a NaN or an infinity as `null`, and the report's only optional values are
-/// the milestones, `geo_hop_fraction`, `ledger.bang_time_s`, the limits' `t_s`, `bang` (a
-/// run stopped before the bang) and `bang.ended_by` (a bang cut short).
+/// the milestones, `geo_hop_fraction`, `ledger.bang_time_s`, the limits' `t_s`, the rivals'
+/// times and stall fractions, `bang` (a run stopped before the bang) and `bang.ended_by` (a
+/// bang cut short).
 fn unexpected_nulls(v: &serde_json::Value, path: &str, out: &mut Vec<String>) {
     match v {
         serde_json::Value::Null => {
@@ -169,7 +170,9 @@ fn unexpected_nulls(v: &serde_json::Value, path: &str, out: &mut Vec<String>) {
                 || path == "ledger.bang_time_s"
                 || path == "bang"
                 || path == "bang.ended_by"
-                || (path.starts_with("reference_limits") && path.ends_with(".t_s"));
+                || (path.starts_with("reference_limits") && path.ends_with(".t_s"))
+                || (path.starts_with("rivals")
+                    && (path.contains(".t_s[") || path.ends_with(".stall_fraction")));
             if !optional {
                 out.push(path.to_owned());
             }
