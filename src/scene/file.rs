@@ -10,6 +10,41 @@ use serde::Deserialize;
 
 use crate::scene::ContactModel;
 
+/// Every key a scene file may set, with its section path (`section.key`), in the order of
+/// the file's sections: the one list the fuzz tests and the override tests draw from. A
+/// test checks that it equals the keys the serde mirror accepts.
+pub const SCENE_KEYS: &[&str] = &[
+    "name",
+    "tape.outer_radius_m",
+    "tape.thickness_m",
+    "tape.mass_kg",
+    "tape.core_radius_m",
+    "discretisation.links_per_turn",
+    "floor.friction",
+    "floor.slope_deg",
+    "floor.sticky",
+    "gravity.g_m_s2",
+    "push.contact_speed_m_s",
+    "solver.max_dt_s",
+    "solver.steps_per_link",
+    "solver.iterations",
+    "solver.freeze_speed_m_s",
+    "solver.bang_step_rad",
+    "solver.bang_iterations",
+    "solver.bang_piece_m",
+    "solver.contact_hz",
+    "solver.joint_hz",
+    "solver.bang_joint_hz",
+    "contact.model",
+    "stop.bang_radius_m",
+    "stop.max_time_s",
+    "stop.bang_cap_s",
+    "stop.rest_fraction",
+    "axis.fixed",
+    "output.sample_interval_s",
+    "output.scene_rate_hz",
+];
+
 /// Default `discretisation.links_per_turn`.
 const DEFAULT_LINKS_PER_TURN: i64 = 32;
 /// Default `floor.friction`.
@@ -227,8 +262,12 @@ impl Default for OutputFile {
 
 #[cfg(test)]
 mod tests {
+    use std::collections::BTreeSet;
+
+    use super::*;
+    use crate::scene::overrides::{Override, scene_with_overrides};
     use crate::scene::tests::{MINIMAL, err, with};
-    use crate::scene::{ContactModel, Scene};
+    use crate::scene::{Scene, SceneError};
     use approx::assert_relative_eq;
 
     #[test]
@@ -292,5 +331,95 @@ mod tests {
         let msg = err(&with("contact", "model", "\"bristle\""));
         assert!(msg.contains("unknown variant `bristle`"), "{msg}");
         assert!(msg.contains("spiral"), "{msg}");
+    }
+
+    /// The keys serde names as expected when `key` (dotted) is unknown: the fields of its
+    /// section.
+    fn expected_keys(key: &str) -> Vec<String> {
+        let e = scene_with_overrides(MINIMAL, "t", &[Override::new(key, "1")]).unwrap_err();
+        let SceneError::Parse { message, .. } = e else {
+            panic!("{key}: {e}");
+        };
+        assert!(message.contains("unknown field"), "{key}: {message}");
+        let list = message
+            .split("expected one of ")
+            .nth(1)
+            .or_else(|| message.split("expected ").nth(1))
+            .unwrap_or_else(|| panic!("{key}: {message}"));
+        list.split('`')
+            .skip(1)
+            .step_by(2)
+            .map(str::to_owned)
+            .collect()
+    }
+
+    #[test]
+    fn scene_keys_are_the_keys_the_file_accepts() {
+        // Read the accepted keys off the serde mirror itself: an unknown key at the top level
+        // lists the sections (and `name`), one in a section lists that section's keys.
+        let mut accepted = BTreeSet::new();
+        for top in expected_keys("no_such_key") {
+            if top == "name" {
+                accepted.insert(top);
+                continue;
+            }
+            for key in expected_keys(&format!("{top}.no_such_key")) {
+                accepted.insert(format!("{top}.{key}"));
+            }
+        }
+        let listed: BTreeSet<String> = SCENE_KEYS.iter().map(|k| (*k).to_owned()).collect();
+        assert_eq!(listed.len(), SCENE_KEYS.len(), "a key is listed twice");
+        assert_eq!(listed, accepted);
+    }
+
+    #[test]
+    fn every_listed_key_can_be_set_and_an_unknown_one_is_rejected() {
+        // Each key set to its default (or, for the required ones, the minimal scene's value)
+        // through the override mechanism loads and gives the minimal scene back.
+        let base = Scene::from_toml_str(MINIMAL, "t").unwrap();
+        for key in SCENE_KEYS {
+            let value = match *key {
+                "name" => "t",
+                "tape.outer_radius_m" => "0.06",
+                "tape.thickness_m" => "0.005",
+                "tape.mass_kg" => "1.5",
+                "tape.core_radius_m" | "floor.slope_deg" => "0.0",
+                "discretisation.links_per_turn" => "32",
+                "floor.friction" => "1.0",
+                "floor.sticky" | "axis.fixed" => "false",
+                "gravity.g_m_s2" => "9.81",
+                "push.contact_speed_m_s" => "0.3",
+                "solver.max_dt_s" | "solver.freeze_speed_m_s" | "stop.rest_fraction" => "0.001",
+                "output.sample_interval_s" => "0.001",
+                "solver.steps_per_link" | "solver.iterations" => "4",
+                "solver.bang_step_rad" => "0.15",
+                "solver.bang_iterations" => "24",
+                "solver.bang_piece_m" => "0.005",
+                "solver.contact_hz" => "1e4",
+                "solver.joint_hz" => "1e7",
+                "solver.bang_joint_hz" => "1e9",
+                "contact.model" => "spiral",
+                "stop.bang_radius_m" => "0.01",
+                "stop.max_time_s" => "60",
+                "stop.bang_cap_s" => "2",
+                "output.scene_rate_hz" => "100",
+                other => panic!("no value for {other}: add it here"),
+            };
+            let s = scene_with_overrides(MINIMAL, "t", &[Override::new(key, value)])
+                .unwrap_or_else(|e| panic!("{key} = {value}: {e}"));
+            assert_eq!(
+                Scene {
+                    source_text: String::new(),
+                    ..s
+                },
+                Scene {
+                    source_text: String::new(),
+                    ..base.clone()
+                },
+                "{key} = {value}"
+            );
+        }
+        let msg = err(&with("floor", "slope", "1.0"));
+        assert!(msg.contains("unknown field `slope`"), "{msg}");
     }
 }
