@@ -4,10 +4,12 @@
 //!
 //! The TOML is read into a private serde mirror (`file`: every section
 //! `deny_unknown_fields`, defaults filled by serde), then every value is checked once, in
-//! dependency order (`validate`), and the first violation is reported as
-//! [`SceneError::Invalid`] naming the key with its section path, the offending value and the
-//! rule. This file holds the public types and the entry points.
+//! dependency order (`validate`), and the run the scene asks for is held to the budgets of
+//! `budget`; the first violation is reported as [`SceneError::Invalid`] naming the key with
+//! its section path, the offending value and the rule. This file holds the public types and
+//! the entry points.
 
+mod budget;
 mod file;
 pub mod overrides;
 mod validate;
@@ -16,6 +18,9 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+pub use budget::{
+    BANG_TURN_RAD, MAX_ENGINE_STEPS, MAX_FRAME_NODES, MAX_LINKS, MAX_SAMPLES, MIN_BANG_STEP_RAD,
+};
 pub use file::SCENE_KEYS;
 
 /// Why a scene could not be loaded.
@@ -134,7 +139,9 @@ pub struct Stop {
     pub rest_fraction: f64,
 }
 
-/// A validated scene: every value is finite and within its documented range.
+/// A validated scene: every value is finite and within its documented range, and the run it
+/// asks for is within the budgets ([`MAX_ENGINE_STEPS`], [`MIN_BANG_STEP_RAD`],
+/// [`MAX_LINKS`], [`MAX_SAMPLES`], [`MAX_FRAME_NODES`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Scene {
     /// Scene name (default: the file stem, or the name passed to [`Scene::from_toml_str`]).

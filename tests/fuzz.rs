@@ -1,14 +1,19 @@
 //! Property tests of scene loading: arbitrary text, mutated scene files, every key of
-//! [`SCENE_KEYS`] over wide ranges (zero, negative, NaN, infinities, huge and tiny values).
-//! Loading never panics, a rejection names a real key (or is a parse error), and every
-//! accepted scene keeps the invariants the model relies on. Case counts: see [`cases`].
+//! [`SCENE_KEYS`] over wide ranges (zero, negative, NaN, infinities, huge and tiny values)
+//! and the keys that set the size of a run over many orders of magnitude. Loading never
+//! panics, a rejection names a real key (or is a parse error), and every accepted scene
+//! keeps the invariants the model relies on and the run-size budgets. Case counts: see
+//! [`cases`].
 
 use std::f64::consts::PI;
 
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
 use uncoil::scene::overrides::{Override, scene_with_overrides};
-use uncoil::scene::{SCENE_KEYS, Scene, SceneError};
+use uncoil::scene::{
+    MAX_ENGINE_STEPS, MAX_FRAME_NODES, MAX_LINKS, MAX_SAMPLES, MIN_BANG_STEP_RAD, SCENE_KEYS,
+    Scene, SceneError,
+};
 use uncoil::spiral::Spiral;
 
 /// The valid value each key takes in [`scene_text`]: the yoga mat's, and the default of the
@@ -98,7 +103,7 @@ fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
         "outer link longer than R"
     );
     let links = (r - core - b) / b * n;
-    prop_assert!(links <= 1e6, "too many links");
+    prop_assert!(links <= MAX_LINKS, "too many links");
     prop_assert!(s.friction >= 0.0);
     prop_assert!(s.slope_deg.abs() < 45.0);
     prop_assert!((0.0..=1000.0).contains(&s.g_m_s2));
@@ -113,10 +118,25 @@ fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
     prop_assert!(s.stop.rest_fraction > 0.0 && s.stop.rest_fraction < 1.0);
     prop_assert!(s.solver.bang_piece_m >= 0.0);
     prop_assert!((1..=1000).contains(&s.solver.bang_iterations));
-    prop_assert!(s.solver.bang_step_rad > 0.0 && s.solver.bang_step_rad <= 1.0);
+    prop_assert!(s.solver.bang_step_rad >= MIN_BANG_STEP_RAD && s.solver.bang_step_rad <= 1.0);
     prop_assert!(s.solver.contact_hz > 0.0 && s.solver.joint_hz > 0.0);
     prop_assert!(s.solver.bang_joint_hz > 0.0 && s.scene_rate_hz >= 0.0);
     prop_assert!(!s.name.trim().is_empty());
+    // The run it asks for is within the budgets.
+    let (t_max, dt) = (s.stop.max_time_s, s.solver.max_dt_s);
+    prop_assert!(t_max / dt <= MAX_ENGINE_STEPS, "steps at max_dt_s");
+    prop_assert!(
+        links * s.solver.steps_per_link <= MAX_ENGINE_STEPS,
+        "steps per link"
+    );
+    prop_assert!(
+        t_max / s.sample_interval_s.max(dt) <= MAX_SAMPLES,
+        "samples"
+    );
+    prop_assert!(
+        t_max * s.scene_rate_hz.min(1.0 / dt) * (links + 1.0) <= MAX_FRAME_NODES,
+        "drawn nodes"
+    );
     // The geometry the model builds from it is finite and has at least one link per turn.
     let spiral = Spiral::wound(r, b, core);
     prop_assert!(spiral.length().is_finite() && spiral.length() > 0.0);
@@ -200,6 +220,35 @@ fn scene_text() -> impl Strategy<Value = String> {
     })
 }
 
+/// A scene whose run-size keys range over many orders of magnitude (log-uniform), so that
+/// the budgets on engine steps, samples and drawings decide.
+fn run_size_scene_text() -> impl Strategy<Value = String> {
+    let log = |lo: f64, hi: f64| (lo..hi).prop_map(|e: f64| 10f64.powf(e));
+    (
+        (
+            log(-12.0, -1.0),
+            log(-3.0, 4.0),
+            log(0.0, 3.0),
+            log(-10.0, 0.0),
+        ),
+        (
+            log(-8.0, -1.0),
+            log(-2.0, 12.0),
+            3u32..4096,
+            log(-4.6, -1.7),
+        ),
+    )
+        .prop_map(|((dt, t_max, per_link, bang_step), (sample, rate, n, b))| {
+            format!(
+                "[tape]\nouter_radius_m = 0.03\nthickness_m = {b:e}\nmass_kg = 0.2\n\
+                 [discretisation]\nlinks_per_turn = {n}\n[push]\ncontact_speed_m_s = 0.1\n\
+                 [solver]\nmax_dt_s = {dt:e}\nsteps_per_link = {per_link:e}\n\
+                 bang_step_rad = {bang_step:e}\n[stop]\nmax_time_s = {t_max:e}\n\
+                 [output]\nsample_interval_s = {sample:e}\nscene_rate_hz = {rate:e}\n"
+            )
+        })
+}
+
 /// A physically plausible scene: every value inside its range, so that the geometric
 /// rules (b < R/2, core + 2b <= R, link length, link count, bang radius) decide.
 fn plausible_scene_text() -> impl Strategy<Value = String> {
@@ -243,7 +292,7 @@ fn mutated_scene() -> impl Strategy<Value = String> {
     })
 }
 
-/// Cases per property: `PROPTEST_CASES` if set, else 2000 (10,000 in all, about a second).
+/// Cases per property: `PROPTEST_CASES` if set, else 2000 (12,000 in all, about a second).
 fn cases() -> u32 {
     std::env::var("PROPTEST_CASES")
         .ok()
@@ -285,6 +334,10 @@ proptest! {
         load_and_check(&text)?;
     }
 
+    #[test]
+    fn run_size_keys_accepted_scenes_keep_their_budgets(text in run_size_scene_text()) {
+        load_and_check(&text)?;
+    }
 }
 
 #[test]

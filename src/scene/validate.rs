@@ -2,11 +2,13 @@
 //! section in the file's order (later rules may rely on earlier values being valid), the
 //! first violation reported as `key = value: rule`. It reads only the serde mirror's values;
 //! it does not parse TOML, fill defaults other than the ones derived from the tape
-//! (`solver.bang_piece_m`, `stop.bang_radius_m`).
+//! (`solver.bang_piece_m`, `stop.bang_radius_m`), or bound the size of the run (that is
+//! `budget`'s, checked last).
 
 use std::fmt::Display;
 use std::ops::RangeInclusive;
 
+use crate::scene::budget::{self, MAX_LINKS};
 use crate::scene::file::{
     DiscretisationFile, FloorFile, OutputFile, PushFile, SceneFile, SolverFile, StopFile, TapeFile,
 };
@@ -33,12 +35,9 @@ const MAX_CONTACT_SPEED_M_S: f64 = 1000.0;
 const MAX_MAX_DT_S: f64 = 0.1;
 /// Bound of `floor.slope_deg` (degrees, either sign).
 const MAX_SLOPE_DEG: f64 = 45.0;
-/// Upper bound of the number of links of a tape (turns times `links_per_turn`): the model
-/// keeps every link's geometry in memory.
-const MAX_LINKS: f64 = 1.0e6;
 
 /// The error for `key = value` breaking `rule`.
-fn invalid(key: &str, value: impl Display, rule: impl Into<String>) -> SceneError {
+pub(super) fn invalid(key: &str, value: impl Display, rule: impl Into<String>) -> SceneError {
     SceneError::Invalid {
         key: key.to_owned(),
         value: value.to_string(),
@@ -48,7 +47,7 @@ fn invalid(key: &str, value: impl Display, rule: impl Into<String>) -> SceneErro
 
 /// A float as written in messages: plainly, or in exponent form when huge or tiny (so that
 /// `1e300` does not print 301 digits).
-struct Shown(f64);
+pub(super) struct Shown(pub(super) f64);
 
 impl Display for Shown {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -88,7 +87,7 @@ fn check_int(key: &str, value: i64, range: &RangeInclusive<i64>) -> Result<u32, 
 
 impl Scene {
     /// Checks every value of `file` once, in dependency order (later rules may rely on
-    /// earlier values being valid).
+    /// earlier values being valid), then the size of the run it asks for.
     pub(super) fn validate(
         file: SceneFile,
         default_name: &str,
@@ -108,7 +107,7 @@ impl Scene {
         let solver = solver(&file.solver, &tape)?;
         let stop = stop(&file.stop, &tape)?;
         let (sample_interval_s, scene_rate_hz) = output(&file.output)?;
-        Ok(Scene {
+        let scene = Scene {
             name,
             tape,
             links_per_turn,
@@ -124,7 +123,9 @@ impl Scene {
             sample_interval_s,
             scene_rate_hz,
             source_text: text.to_owned(),
-        })
+        };
+        budget::check(&scene)?;
+        Ok(scene)
     }
 }
 
@@ -216,8 +217,7 @@ fn discretisation(d: &DiscretisationFile, tape: &Tape) -> Result<u32, SceneError
     if outer_arc_m / f64::from(links_per_turn) > r {
         return Err(too_long(raw));
     }
-    let turns = (r - tape.core_radius_m - b) / b;
-    let links = turns * f64::from(links_per_turn);
+    let links = budget::links(tape, links_per_turn);
     if links > MAX_LINKS {
         return Err(invalid(
             key,
@@ -225,7 +225,7 @@ fn discretisation(d: &DiscretisationFile, tape: &Tape) -> Result<u32, SceneError
             format!(
                 "the tape would have {links:.0} links ({:.0} turns), more than {MAX_LINKS:.0}: \
                  use fewer links per turn or a thicker tape",
-                turns
+                budget::turns(tape)
             ),
         ));
     }
