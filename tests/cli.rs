@@ -282,6 +282,22 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
         Edit::Append("[stop]\nmax_time_s = 1e9"),
         &["stop.max_time_s = 1000000000: must be > 0 and <= 10000"],
     ),
+    // Values that pass their own range but would make the run endless.
+    (
+        "tiny time step",
+        Edit::Append("[solver]\nmax_dt_s = 1e-308"),
+        &[
+            "solver.max_dt_s = 1e-308: must be >= stop.max_time_s / 1e8 (= 6e-7): ",
+            "a run may take at most 1e8 engine steps",
+        ],
+    ),
+    (
+        "tiny bang step",
+        Edit::Append("[solver]\nbang_step_rad = 1e-300"),
+        &[
+            "solver.bang_step_rad = 1e-300: must be >= 0.0001: a run may take at most 1e8 engine steps",
+        ],
+    ),
     // Inconsistent geometry.
     (
         "one link per turn",
@@ -375,6 +391,72 @@ fn bad_scenes_exit_2_with_message_and_no_output() {
         BAD_SCENES.len(),
         failures.join("\n")
     );
+}
+
+/// Hostile overrides of a shipped scene: each is refused at once, before the run starts,
+/// naming the key and the budget it would break.
+const HOSTILE_OVERRIDES: &[(&[&str], &[&str])] = &[
+    (
+        &["solver.max_dt_s=1e-308"],
+        &[
+            "error: solver.max_dt_s = 1e-308: must be >= stop.max_time_s / 1e8 (= 6e-7): \
+             a run may take at most 1e8 engine steps, and stop.max_time_s = 60 s at this step \
+             is more than 1e308",
+        ],
+    ),
+    (
+        &["solver.max_dt_s=1e-7", "stop.max_time_s=1e4"],
+        &["error: solver.max_dt_s = 1e-7: must be >= stop.max_time_s / 1e8 (= 0.0001): "],
+    ),
+    (
+        &["solver.bang_step_rad=1e-300"],
+        &["error: solver.bang_step_rad = 1e-300: must be >= 0.0001: "],
+    ),
+    (
+        &["solver.max_dt_s=1e-6", "output.sample_interval_s=0"],
+        &[
+            "error: output.sample_interval_s = 0: must be >= stop.max_time_s / 1e7 \
+             (= 0.000006): a run may write at most 1e7 samples",
+        ],
+    ),
+    (
+        &["stop.max_time_s=1e300"],
+        &["error: stop.max_time_s = 1e300: must be > 0 and <= 10000"],
+    ),
+];
+
+#[test]
+fn hostile_overrides_exit_2_at_once() {
+    let yoga = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/yoga-mat.toml");
+    for (sets, expected) in HOSTILE_OVERRIDES {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        let mut cmd = run_command(&yoga, &out);
+        cmd.arg("--no-mcap");
+        for set in *sets {
+            cmd.args(["--set", set]);
+        }
+        let start = std::time::Instant::now();
+        let output = cmd
+            .timeout(std::time::Duration::from_secs(60))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{sets:?}: {stderr}");
+        assert!(
+            start.elapsed().as_secs_f64() < 10.0,
+            "{sets:?} took {:?}",
+            start.elapsed()
+        );
+        assert!(output.stdout.is_empty(), "{sets:?}");
+        for want in *expected {
+            assert!(
+                stderr.contains(want),
+                "{sets:?}: stderr lacks `{want}`: {stderr}"
+            );
+        }
+        assert!(!out.exists(), "{sets:?}: output folder created");
+    }
 }
 
 #[test]

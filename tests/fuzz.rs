@@ -1,35 +1,42 @@
-//! Property tests of scene loading: arbitrary text, mutated scene files and every key over
-//! wide ranges (zero, negative, NaN, infinities, huge and tiny values). Loading never
+//! Property tests of scene loading: arbitrary text, mutated scene files, every key of
+//! [`SCENE_KEYS`] over wide ranges (zero, negative, NaN, infinities, huge and tiny values)
+//! and the keys that set the size of a run over many orders of magnitude. Loading never
 //! panics, a rejection names a real key (or is a parse error), and every accepted scene
-//! keeps the invariants the model relies on. Case counts: see [`cases`].
+//! keeps the invariants the model relies on and the run-size budgets. Case counts: see
+//! [`cases`].
 
 use std::f64::consts::PI;
 
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
-use uncoil::scene::{Scene, SceneError};
+use uncoil::scene::overrides::{Override, scene_with_overrides};
+use uncoil::scene::{
+    MAX_ENGINE_STEPS, MAX_FRAME_NODES, MAX_LINKS, MAX_SAMPLES, MIN_BANG_STEP_RAD, SCENE_KEYS,
+    Scene, SceneError,
+};
 use uncoil::spiral::Spiral;
 
-/// Every key a scene may set, with its section.
-const KEYS: &[&str] = &[
-    "name",
-    "tape.outer_radius_m",
-    "tape.thickness_m",
-    "tape.mass_kg",
-    "tape.core_radius_m",
-    "discretisation.links_per_turn",
-    "floor.friction",
-    "gravity.g_m_s2",
-    "push.contact_speed_m_s",
-    "solver.max_dt_s",
-    "solver.steps_per_link",
-    "solver.iterations",
-    "solver.freeze_speed_m_s",
-    "stop.bang_radius_m",
-    "stop.max_time_s",
-    "stop.bang_cap_s",
-    "output.sample_interval_s",
-];
+/// The valid value each key takes in [`scene_text`]: the yoga mat's, and the default of the
+/// keys its file leaves out. Every key of [`SCENE_KEYS`] must have one (a test checks it).
+fn valid_value(key: &str) -> Option<String> {
+    let yoga: toml::Table = toml::from_str(YOGA).unwrap();
+    let (section, name) = key
+        .split_once('.')
+        .map_or((None, key), |(s, k)| (Some(s), k));
+    let table = match section {
+        Some(s) => yoga.get(s).and_then(toml::Value::as_table),
+        None => Some(&yoga),
+    };
+    if let Some(v) = table.and_then(|t| t.get(name)) {
+        return Some(v.to_string());
+    }
+    let default = match key {
+        "floor.slope_deg" => "0.0",
+        "floor.sticky" | "axis.fixed" => "false",
+        _ => return None,
+    };
+    Some(default.to_owned())
+}
 
 const YOGA: &str = include_str!("../scenes/yoga-mat.toml");
 
@@ -39,7 +46,7 @@ fn load_and_check(text: &str) -> Result<(), TestCaseError> {
         Ok(scene) => check_invariants(&scene),
         Err(SceneError::Invalid { key, value, rule }) => {
             prop_assert!(
-                KEYS.contains(&key.as_str()),
+                SCENE_KEYS.contains(&key.as_str()),
                 "unknown key {key} in the error"
             );
             prop_assert!(!value.is_empty() && !rule.is_empty());
@@ -62,17 +69,23 @@ fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
         t.mass_kg,
         t.core_radius_m,
         s.friction,
+        s.slope_deg,
         s.g_m_s2,
         s.push_speed_m_s,
         s.solver.max_dt_s,
         s.solver.steps_per_link,
         s.solver.freeze_speed_m_s,
+        s.solver.bang_step_rad,
+        s.solver.bang_piece_m,
+        s.solver.contact_hz,
+        s.solver.joint_hz,
+        s.solver.bang_joint_hz,
         s.stop.bang_radius_m,
         s.stop.max_time_s,
         s.stop.bang_cap_s,
         s.stop.rest_fraction,
-        s.solver.bang_piece_m,
         s.sample_interval_s,
+        s.scene_rate_hz,
     ];
     prop_assert!(
         all.iter().all(|v| v.is_finite()),
@@ -89,8 +102,10 @@ fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
         2.0 * PI * (r - b / 2.0) / n <= r,
         "outer link longer than R"
     );
-    prop_assert!((r - core - b) / b * n <= 1e6, "too many links");
+    let links = (r - core - b) / b * n;
+    prop_assert!(links <= MAX_LINKS, "too many links");
     prop_assert!(s.friction >= 0.0);
+    prop_assert!(s.slope_deg.abs() < 45.0);
     prop_assert!((0.0..=1000.0).contains(&s.g_m_s2));
     prop_assert!(s.push_speed_m_s > 0.0 && s.push_speed_m_s <= 1000.0);
     prop_assert!(s.solver.max_dt_s > 0.0 && s.solver.max_dt_s <= 0.1);
@@ -103,7 +118,25 @@ fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
     prop_assert!(s.stop.rest_fraction > 0.0 && s.stop.rest_fraction < 1.0);
     prop_assert!(s.solver.bang_piece_m >= 0.0);
     prop_assert!((1..=1000).contains(&s.solver.bang_iterations));
+    prop_assert!(s.solver.bang_step_rad >= MIN_BANG_STEP_RAD && s.solver.bang_step_rad <= 1.0);
+    prop_assert!(s.solver.contact_hz > 0.0 && s.solver.joint_hz > 0.0);
+    prop_assert!(s.solver.bang_joint_hz > 0.0 && s.scene_rate_hz >= 0.0);
     prop_assert!(!s.name.trim().is_empty());
+    // The run it asks for is within the budgets.
+    let (t_max, dt) = (s.stop.max_time_s, s.solver.max_dt_s);
+    prop_assert!(t_max / dt <= MAX_ENGINE_STEPS, "steps at max_dt_s");
+    prop_assert!(
+        links * s.solver.steps_per_link <= MAX_ENGINE_STEPS,
+        "steps per link"
+    );
+    prop_assert!(
+        t_max / s.sample_interval_s.max(dt) <= MAX_SAMPLES,
+        "samples"
+    );
+    prop_assert!(
+        t_max * s.scene_rate_hz.min(1.0 / dt) * (links + 1.0) <= MAX_FRAME_NODES,
+        "drawn nodes"
+    );
     // The geometry the model builds from it is finite and has at least one link per turn.
     let spiral = Spiral::wound(r, b, core);
     prop_assert!(spiral.length().is_finite() && spiral.length() > 0.0);
@@ -114,9 +147,9 @@ fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
 
 /// A value for a float key: mostly the yoga mat's `valid` value (so that later rules are
 /// reached), else ordinary magnitudes of either sign, zero, and the edges of f64.
-fn float_value(valid: &'static str) -> impl Strategy<Value = String> {
+fn float_value(valid: String) -> impl Strategy<Value = String> {
     prop_oneof![
-        12 => Just(valid.to_owned()),
+        12 => Just(valid),
         1 => (-12i32..4, 1.0f64..10.0, any::<bool>())
             .prop_map(|(e, m, neg)| format!("{}{m}e{e}", if neg { "-" } else { "" })),
         1 => prop::sample::select(vec![
@@ -128,9 +161,9 @@ fn float_value(valid: &'static str) -> impl Strategy<Value = String> {
 }
 
 /// A value for an integer key: mostly `valid`, else any count or a wrong form.
-fn int_value(valid: &'static str) -> impl Strategy<Value = String> {
+fn int_value(valid: String) -> impl Strategy<Value = String> {
     prop_oneof![
-        12 => Just(valid.to_owned()),
+        12 => Just(valid),
         1 => (-10i64..5000).prop_map(|v| v.to_string()),
         1 => prop::sample::select(vec![
             "0", "-1", "4096", "4097", "9223372036854775807", "-9223372036854775808",
@@ -140,54 +173,80 @@ fn int_value(valid: &'static str) -> impl Strategy<Value = String> {
     ]
 }
 
-/// A scene with every key set (each one left out with some probability).
+/// Any of a few values of the wrong form or out of range for a boolean, string or enum key.
+fn other_value(valid: String, odd: Vec<&'static str>) -> BoxedStrategy<String> {
+    let odd: Vec<String> = odd.into_iter().map(str::to_owned).collect();
+    prop_oneof![8 => Just(valid), 1 => prop::sample::select(odd)].boxed()
+}
+
+/// A value for `key` by the form of its valid value: float, integer, boolean or string.
+fn value_for(key: &str) -> BoxedStrategy<String> {
+    let valid = valid_value(key).unwrap_or_else(|| panic!("no valid value for {key}"));
+    match toml::from_str::<toml::Table>(&format!("v = {valid}")).unwrap()["v"] {
+        toml::Value::Float(_) => float_value(valid).boxed(),
+        toml::Value::Integer(_) => int_value(valid).boxed(),
+        toml::Value::Boolean(_) => other_value(valid, vec!["true", "false", "1", "\"yes\""]),
+        _ if key == "contact.model" => other_value(valid, vec!["\"bristle\"", "1", "\"\""]),
+        _ => other_value(valid, vec!["\" \"", "\"\"", "1", "\"\\u00e9\""]),
+    }
+}
+
+/// A scene with every key of [`SCENE_KEYS`] set (each one left out with some probability).
 fn scene_text() -> impl Strategy<Value = String> {
-    let floats: Vec<_> = [
-        "0.06", "0.005", "1.5", "0.0", "1.0", "9.81", "0.3", "0.001", "4.0", "0.001", "0.005",
-        "60.0", "0.05", "0.001",
-    ]
-    .into_iter()
-    .map(float_value)
-    .collect();
-    let ints = vec![int_value("32"), int_value("4")];
-    let present = prop::collection::vec(prop::bool::weighted(0.85), 16);
-    let model = prop_oneof![
-        8 => Just("\"spiral\""),
-        1 => prop::sample::select(vec!["\"bristle\"", "1"]),
-    ];
-    (floats, ints, present, model).prop_map(|(f, i, p, model)| {
-        let keys: [(&str, &str, &String); 16] = [
-            ("tape", "outer_radius_m", &f[0]),
-            ("tape", "thickness_m", &f[1]),
-            ("tape", "mass_kg", &f[2]),
-            ("tape", "core_radius_m", &f[3]),
-            ("discretisation", "links_per_turn", &i[0]),
-            ("floor", "friction", &f[4]),
-            ("gravity", "g_m_s2", &f[5]),
-            ("push", "contact_speed_m_s", &f[6]),
-            ("solver", "max_dt_s", &f[7]),
-            ("solver", "steps_per_link", &f[8]),
-            ("solver", "iterations", &i[1]),
-            ("solver", "freeze_speed_m_s", &f[9]),
-            ("stop", "bang_radius_m", &f[10]),
-            ("stop", "max_time_s", &f[11]),
-            ("stop", "bang_cap_s", &f[12]),
-            ("output", "sample_interval_s", &f[13]),
-        ];
-        let mut text = String::new();
-        let mut section = "";
-        for ((sec, key, value), on) in keys.iter().zip(p) {
-            if *sec != section {
-                text.push_str(&format!("[{sec}]\n"));
-                section = sec;
+    let values: Vec<BoxedStrategy<String>> = SCENE_KEYS.iter().map(|k| value_for(k)).collect();
+    let present = prop::collection::vec(prop::bool::weighted(0.85), SCENE_KEYS.len());
+    (values, present).prop_map(|(values, present)| {
+        let mut top = String::new();
+        let mut sections: Vec<(&str, String)> = Vec::new();
+        for ((key, value), on) in SCENE_KEYS.iter().zip(values).zip(present) {
+            if !on {
+                continue;
             }
-            if on {
-                text.push_str(&format!("{key} = {value}\n"));
+            match key.split_once('.') {
+                None => top.push_str(&format!("{key} = {value}\n")),
+                Some((section, name)) => {
+                    let line = format!("{name} = {value}\n");
+                    match sections.iter_mut().find(|(s, _)| *s == section) {
+                        Some((_, body)) => body.push_str(&line),
+                        None => sections.push((section, line)),
+                    }
+                }
             }
         }
-        text.push_str(&format!("[contact]\nmodel = {model}\n"));
-        text
+        for (section, body) in sections {
+            top.push_str(&format!("[{section}]\n{body}"));
+        }
+        top
     })
+}
+
+/// A scene whose run-size keys range over many orders of magnitude (log-uniform), so that
+/// the budgets on engine steps, samples and drawings decide.
+fn run_size_scene_text() -> impl Strategy<Value = String> {
+    let log = |lo: f64, hi: f64| (lo..hi).prop_map(|e: f64| 10f64.powf(e));
+    (
+        (
+            log(-12.0, -1.0),
+            log(-3.0, 4.0),
+            log(0.0, 3.0),
+            log(-10.0, 0.0),
+        ),
+        (
+            log(-8.0, -1.0),
+            log(-2.0, 12.0),
+            3u32..4096,
+            log(-4.6, -1.7),
+        ),
+    )
+        .prop_map(|((dt, t_max, per_link, bang_step), (sample, rate, n, b))| {
+            format!(
+                "[tape]\nouter_radius_m = 0.03\nthickness_m = {b:e}\nmass_kg = 0.2\n\
+                 [discretisation]\nlinks_per_turn = {n}\n[push]\ncontact_speed_m_s = 0.1\n\
+                 [solver]\nmax_dt_s = {dt:e}\nsteps_per_link = {per_link:e}\n\
+                 bang_step_rad = {bang_step:e}\n[stop]\nmax_time_s = {t_max:e}\n\
+                 [output]\nsample_interval_s = {sample:e}\nscene_rate_hz = {rate:e}\n"
+            )
+        })
 }
 
 /// A physically plausible scene: every value inside its range, so that the geometric
@@ -233,7 +292,7 @@ fn mutated_scene() -> impl Strategy<Value = String> {
     })
 }
 
-/// Cases per property: `PROPTEST_CASES` if set, else 2000 (10,000 in all, about a second).
+/// Cases per property: `PROPTEST_CASES` if set, else 2000 (12,000 in all, about a second).
 fn cases() -> u32 {
     std::env::var("PROPTEST_CASES")
         .ok()
@@ -273,5 +332,20 @@ proptest! {
     #[test]
     fn plausible_geometry_accepted_scenes_keep_their_invariants(text in plausible_scene_text()) {
         load_and_check(&text)?;
+    }
+
+    #[test]
+    fn run_size_keys_accepted_scenes_keep_their_budgets(text in run_size_scene_text()) {
+        load_and_check(&text)?;
+    }
+}
+
+#[test]
+fn every_scene_key_has_a_valid_value_that_loads() {
+    for key in SCENE_KEYS {
+        let value = valid_value(key).unwrap_or_else(|| panic!("no valid value for {key}"));
+        if let Err(e) = scene_with_overrides(YOGA, "fuzz", &[Override::new(key, &value)]) {
+            panic!("{key} = {value}: {e}");
+        }
     }
 }
