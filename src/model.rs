@@ -265,7 +265,7 @@ impl Model {
         let b = tape.thickness_m;
         let spiral = Spiral::wound(tape.outer_radius_m, b, tape.core_radius_m);
         let moments = SpiralMoments::new(spiral);
-        let links = build::chain_links(&spiral, scene.links_per_turn, tape.mass_kg);
+        let links = build::chain_links(&spiral, scene.discretisation.links_per_turn, tape.mass_kg);
         let (mut world, g_along, g_perp) = build::new_world(scene);
         let ground = world.insert_body(RigidBodyBuilder::fixed());
         let floor = build::insert_floor(&mut world, scene, &spiral, ground);
@@ -295,7 +295,7 @@ impl Model {
             moments,
             links,
             local,
-            link_angle: 2.0 * PI / f64::from(scene.links_per_turn),
+            link_angle: 2.0 * PI / f64::from(scene.discretisation.links_per_turn),
             steps_per_link: scene.solver.steps_per_link,
             max_dt: scene.solver.max_dt_s,
             freeze_speed: scene.solver.freeze_speed_m_s,
@@ -310,7 +310,7 @@ impl Model {
                 scene.solver.bang_joint_hz,
                 SpringCoefficients::<Real>::joint_defaults().damping_ratio,
             ),
-            friction: scene.friction,
+            friction: scene.floor.friction,
             g: g_perp,
             g_along,
             flat_first_moment,

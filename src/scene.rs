@@ -16,7 +16,7 @@ mod validate;
 
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 pub use budget::{
     BANG_TURN_RAD, MAX_ENGINE_STEPS, MAX_FRAME_NODES, MAX_LINKS, MAX_SAMPLES, MIN_BANG_STEP_RAD,
@@ -53,15 +53,6 @@ pub enum SceneError {
         /// The rule the value breaks.
         rule: String,
     },
-}
-
-/// How the links of the coil touch each other.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ContactModel {
-    /// Contacts between neighbouring turns of the spiral (`"spiral"`).
-    #[default]
-    Spiral,
 }
 
 /// The tape and its winding.
@@ -148,9 +139,37 @@ pub struct Scene {
     pub name: String,
     /// The tape and its winding (section `[tape]`, required).
     pub tape: Tape,
+    /// How finely the tape is cut into links (`[discretisation]`).
+    pub discretisation: Discretisation,
+    /// The floor (`[floor]`).
+    pub floor: Floor,
+    /// Gravity (`[gravity]`).
+    pub gravity: Gravity,
+    /// How the coil is set going (`[push]`).
+    pub push: Push,
+    /// A fixed axis instead of the floor (`[axis]`).
+    pub axis: Axis,
+    /// Time-stepping and solver settings (`[solver]`).
+    pub solver: Solver,
+    /// When the simulation ends (`[stop]`).
+    pub stop: Stop,
+    /// What is written (`[output]`).
+    pub output: Output,
+    /// The TOML text as read, for logging.
+    pub source_text: String,
+}
+
+/// `[discretisation]`: how finely the tape is cut into links.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Discretisation {
     /// Links per full turn of the spiral, count (default: 32). Link length scales with the
     /// local radius, so every turn is resolved to the same angle.
     pub links_per_turn: u32,
+}
+
+/// `[floor]`: the floor the tape is laid on.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Floor {
     /// Coulomb friction coefficient between tape and floor, dimensionless (default: 1.0).
     pub friction: f64,
     /// Slope of the floor, degrees, positive when the rolling direction (+x) is downhill
@@ -160,27 +179,39 @@ pub struct Scene {
     /// Whether the tape sticks to the floor where it touches it (sec. 2.1 remark for g = 0):
     /// the coil is then held at its contact line, pulled as well as pushed (default: false).
     pub sticky: bool,
-    /// Whether the coil turns about a fixed horizontal axis through the spiral's centre,
-    /// the tape hanging from it (App. E), instead of rolling on the floor (default: false).
-    pub fixed_axis: bool,
+}
+
+/// `[gravity]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Gravity {
     /// Gravitational acceleration, m/s² (default: 9.81).
     pub g_m_s2: f64,
+}
+
+/// `[push]`: how the coil is set going.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Push {
     /// Initial speed of the contact line, m/s (default: 0.0, which is rejected: a scene
     /// must set it > 0).
-    pub push_speed_m_s: f64,
-    /// Time-stepping and solver settings.
-    pub solver: Solver,
-    /// How the links of the coil touch each other (default: [`ContactModel::Spiral`]).
-    pub contact_model: ContactModel,
-    /// When the simulation ends.
-    pub stop: Stop,
+    pub contact_speed_m_s: f64,
+}
+
+/// `[axis]`: a fixed axis instead of the floor (App. E).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Axis {
+    /// Whether the coil turns about a fixed horizontal axis through the spiral's centre,
+    /// the tape hanging from it, instead of rolling on the floor (default: false).
+    pub fixed: bool,
+}
+
+/// `[output]`: what a run writes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Output {
     /// Time between rows of `samples.csv`, s; 0 samples every step (default: 0.001).
     pub sample_interval_s: f64,
     /// Drawings of the scene (links and ghost coils) per simulated second, Hz; 0 draws
     /// none (default: 100.0). Samples are not affected.
     pub scene_rate_hz: f64,
-    /// The TOML text as read, for logging.
-    pub source_text: String,
 }
 
 /// The text of the scene file at `path` and its stem, the scene's default name.
@@ -296,21 +327,20 @@ contact_speed_m_s = 0.3
         assert_relative_eq!(s.tape.thickness_m, 0.005);
         assert_relative_eq!(s.tape.mass_kg, 1.5);
         assert_relative_eq!(s.tape.core_radius_m, 0.0);
-        assert_eq!(s.links_per_turn, 32);
-        assert_relative_eq!(s.friction, 1.0);
-        assert_relative_eq!(s.g_m_s2, 9.81);
-        assert_relative_eq!(s.push_speed_m_s, 0.3);
+        assert_eq!(s.discretisation.links_per_turn, 32);
+        assert_relative_eq!(s.floor.friction, 1.0);
+        assert_relative_eq!(s.gravity.g_m_s2, 9.81);
+        assert_relative_eq!(s.push.contact_speed_m_s, 0.3);
         assert_relative_eq!(s.solver.max_dt_s, 0.001);
         assert_relative_eq!(s.solver.steps_per_link, 4.0);
         assert_eq!(s.solver.iterations, 4);
         assert_relative_eq!(s.solver.freeze_speed_m_s, 0.001);
-        assert_eq!(s.contact_model, ContactModel::Spiral);
         assert_relative_eq!(s.stop.bang_radius_m, 0.005);
         assert_relative_eq!(s.stop.max_time_s, 60.0);
-        assert_relative_eq!(s.scene_rate_hz, 100.0);
+        assert_relative_eq!(s.output.scene_rate_hz, 100.0);
         assert_relative_eq!(s.stop.bang_cap_s, 2.0);
         assert_relative_eq!(s.stop.rest_fraction, 0.001);
-        assert_relative_eq!(s.sample_interval_s, 0.001);
+        assert_relative_eq!(s.output.sample_interval_s, 0.001);
         assert!(s.source_text.contains("[tape]"));
     }
 
@@ -322,20 +352,19 @@ contact_speed_m_s = 0.3
         assert_relative_eq!(s.tape.thickness_m, 0.0001);
         assert_relative_eq!(s.tape.mass_kg, 0.2);
         assert_relative_eq!(s.tape.core_radius_m, 0.0);
-        assert_eq!(s.links_per_turn, 40);
-        assert_relative_eq!(s.friction, 1.0);
-        assert_relative_eq!(s.g_m_s2, 9.81);
-        assert_relative_eq!(s.push_speed_m_s, 0.1);
+        assert_eq!(s.discretisation.links_per_turn, 40);
+        assert_relative_eq!(s.floor.friction, 1.0);
+        assert_relative_eq!(s.gravity.g_m_s2, 9.81);
+        assert_relative_eq!(s.push.contact_speed_m_s, 0.1);
         assert_relative_eq!(s.solver.max_dt_s, 0.001);
         assert_relative_eq!(s.solver.steps_per_link, 4.0);
         assert_eq!(s.solver.iterations, 4);
         assert_relative_eq!(s.solver.freeze_speed_m_s, 0.001);
-        assert_eq!(s.contact_model, ContactModel::Spiral);
         assert_relative_eq!(s.stop.bang_radius_m, 0.0002);
         assert_relative_eq!(s.stop.max_time_s, 60.0);
         assert_relative_eq!(s.stop.bang_cap_s, 2.0);
         assert_relative_eq!(s.solver.bang_piece_m, 0.0001);
-        assert_relative_eq!(s.sample_interval_s, 0.001);
+        assert_relative_eq!(s.output.sample_interval_s, 0.001);
     }
 
     #[test]
@@ -360,17 +389,17 @@ contact_speed_m_s = 0.3
     #[test]
     fn variant_keys_default_off_and_the_variant_scenes_set_them() {
         let s = Scene::from_toml_str(MINIMAL, "t").unwrap();
-        assert_relative_eq!(s.slope_deg, 0.0);
-        assert!(!s.sticky && !s.fixed_axis);
-        assert_relative_eq!(shipped("slope-down").slope_deg, 5.0);
-        assert_relative_eq!(shipped("slope-up").slope_deg, -2.0);
-        assert!(shipped("zero-g").sticky);
-        assert!(shipped("vertical").fixed_axis);
+        assert_relative_eq!(s.floor.slope_deg, 0.0);
+        assert!(!s.floor.sticky && !s.axis.fixed);
+        assert_relative_eq!(shipped("slope-down").floor.slope_deg, 5.0);
+        assert_relative_eq!(shipped("slope-up").floor.slope_deg, -2.0);
+        assert!(shipped("zero-g").floor.sticky);
+        assert!(shipped("vertical").axis.fixed);
         for name in ["single-turn", "spool", "frictionless-spool"] {
             assert!(shipped(name).tape.core_radius_m > 0.0, "{name}");
         }
         for name in ["frictionless-spool", "frictionless-coil"] {
-            assert_relative_eq!(shipped(name).friction, 0.0);
+            assert_relative_eq!(shipped(name).floor.friction, 0.0);
         }
     }
 
@@ -384,8 +413,12 @@ contact_speed_m_s = 0.3
     #[test]
     fn scene_serialises() {
         let json = serde_json::to_value(shipped("yoga-mat")).unwrap();
-        assert_eq!(json["contact_model"], "spiral");
+        // The scene serialises with its file's sections and keys.
         assert_eq!(json["tape"]["mass_kg"], 1.5);
+        assert_eq!(json["push"]["contact_speed_m_s"], 0.3);
+        assert_eq!(json["discretisation"]["links_per_turn"], 32);
+        assert_eq!(json["axis"]["fixed"], false);
+        assert!(json.get("contact_model").is_none());
     }
     #[test]
     fn every_shipped_scene_loads_but_the_one_rejected_on_purpose() {

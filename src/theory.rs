@@ -58,10 +58,10 @@ impl References {
                 let sg = SpoolGeometry::of(scene);
                 sg.l_m / sg.r_m
             }),
-            floor_grip: match (scene.fixed_axis, scene.sticky) {
+            floor_grip: match (scene.axis.fixed, scene.floor.sticky) {
                 (true, _) => None,
                 (false, true) => Some(f64::INFINITY),
-                (false, false) => Some(scene.friction),
+                (false, false) => Some(scene.floor.friction),
             },
         }
     }
@@ -70,13 +70,13 @@ impl References {
 /// The exact-geometry model of a scene, on its slope or sliding on a frictionless floor,
 /// tabulated to half the bang radius (a solid coil) or to 99.5 % laid (a spool).
 pub fn exact_geometry(scene: &Scene) -> ExactGeometry {
-    let (p, slope) = (params(scene), scene.slope_deg.to_radians());
+    let (p, slope) = (params(scene), scene.floor.slope_deg.to_radians());
     let f_end = if scene.tape.core_radius_m > 0.0 {
         0.995
     } else {
         1.0 - (0.5 * scene.stop.bang_radius_m / scene.tape.outer_radius_m).powi(2)
     };
-    if scene.friction <= 0.0 {
+    if scene.floor.friction <= 0.0 {
         ExactGeometry::frictionless(p, f_end)
     } else {
         ExactGeometry::to_fraction(p, slope, f_end)
@@ -90,7 +90,7 @@ pub fn params(scene: &Scene) -> Params {
         thickness_m: scene.tape.thickness_m,
         mass_kg: scene.tape.mass_kg,
         core_radius_m: scene.tape.core_radius_m,
-        g_m_s2: scene.g_m_s2,
-        push_speed_m_s: scene.push_speed_m_s,
+        g_m_s2: scene.gravity.g_m_s2,
+        push_speed_m_s: scene.push.contact_speed_m_s,
     }
 }

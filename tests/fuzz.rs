@@ -33,6 +33,8 @@ fn valid_value(key: &str) -> Option<String> {
     let default = match key {
         "floor.slope_deg" => "0.0",
         "floor.sticky" | "axis.fixed" => "false",
+        // Kept so older files load; the shipped scenes no longer set it.
+        "contact.model" => "\"spiral\"",
         _ => return None,
     };
     Some(default.to_owned())
@@ -68,10 +70,10 @@ fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
         t.thickness_m,
         t.mass_kg,
         t.core_radius_m,
-        s.friction,
-        s.slope_deg,
-        s.g_m_s2,
-        s.push_speed_m_s,
+        s.floor.friction,
+        s.floor.slope_deg,
+        s.gravity.g_m_s2,
+        s.push.contact_speed_m_s,
         s.solver.max_dt_s,
         s.solver.steps_per_link,
         s.solver.freeze_speed_m_s,
@@ -84,8 +86,8 @@ fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
         s.stop.max_time_s,
         s.stop.bang_cap_s,
         s.stop.rest_fraction,
-        s.sample_interval_s,
-        s.scene_rate_hz,
+        s.output.sample_interval_s,
+        s.output.scene_rate_hz,
     ];
     prop_assert!(
         all.iter().all(|v| v.is_finite()),
@@ -96,31 +98,31 @@ fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
     prop_assert!(b > 0.0 && b < r / 2.0);
     prop_assert!(t.mass_kg > 0.0 && t.mass_kg <= 1e6);
     prop_assert!(core >= 0.0 && core + 2.0 * b <= r);
-    prop_assert!((3..=4096).contains(&s.links_per_turn));
-    let n = f64::from(s.links_per_turn);
+    prop_assert!((3..=4096).contains(&s.discretisation.links_per_turn));
+    let n = f64::from(s.discretisation.links_per_turn);
     prop_assert!(
         2.0 * PI * (r - b / 2.0) / n <= r,
         "outer link longer than R"
     );
     let links = (r - core - b) / b * n;
     prop_assert!(links <= MAX_LINKS, "too many links");
-    prop_assert!(s.friction >= 0.0);
-    prop_assert!(s.slope_deg.abs() < 45.0);
-    prop_assert!((0.0..=1000.0).contains(&s.g_m_s2));
-    prop_assert!(s.push_speed_m_s > 0.0 && s.push_speed_m_s <= 1000.0);
+    prop_assert!(s.floor.friction >= 0.0);
+    prop_assert!(s.floor.slope_deg.abs() < 45.0);
+    prop_assert!((0.0..=1000.0).contains(&s.gravity.g_m_s2));
+    prop_assert!(s.push.contact_speed_m_s > 0.0 && s.push.contact_speed_m_s <= 1000.0);
     prop_assert!(s.solver.max_dt_s > 0.0 && s.solver.max_dt_s <= 0.1);
     prop_assert!((1.0..=1000.0).contains(&s.solver.steps_per_link));
     prop_assert!((1..=1000).contains(&s.solver.iterations));
     prop_assert!(s.solver.freeze_speed_m_s >= 0.0);
     prop_assert!(core < s.stop.bang_radius_m && s.stop.bang_radius_m < r);
     prop_assert!(s.stop.max_time_s > 0.0 && s.stop.max_time_s <= 1e4);
-    prop_assert!(s.stop.bang_cap_s >= 0.0 && s.sample_interval_s >= 0.0);
+    prop_assert!(s.stop.bang_cap_s >= 0.0 && s.output.sample_interval_s >= 0.0);
     prop_assert!(s.stop.rest_fraction > 0.0 && s.stop.rest_fraction < 1.0);
     prop_assert!(s.solver.bang_piece_m >= 0.0);
     prop_assert!((1..=1000).contains(&s.solver.bang_iterations));
     prop_assert!(s.solver.bang_step_rad >= MIN_BANG_STEP_RAD && s.solver.bang_step_rad <= 1.0);
     prop_assert!(s.solver.contact_hz > 0.0 && s.solver.joint_hz > 0.0);
-    prop_assert!(s.solver.bang_joint_hz > 0.0 && s.scene_rate_hz >= 0.0);
+    prop_assert!(s.solver.bang_joint_hz > 0.0 && s.output.scene_rate_hz >= 0.0);
     prop_assert!(!s.name.trim().is_empty());
     // The run it asks for is within the budgets.
     let (t_max, dt) = (s.stop.max_time_s, s.solver.max_dt_s);
@@ -130,17 +132,17 @@ fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
         "steps per link"
     );
     prop_assert!(
-        t_max / s.sample_interval_s.max(dt) <= MAX_SAMPLES,
+        t_max / s.output.sample_interval_s.max(dt) <= MAX_SAMPLES,
         "samples"
     );
     prop_assert!(
-        t_max * s.scene_rate_hz.min(1.0 / dt) * (links + 1.0) <= MAX_FRAME_NODES,
+        t_max * s.output.scene_rate_hz.min(1.0 / dt) * (links + 1.0) <= MAX_FRAME_NODES,
         "drawn nodes"
     );
     // The geometry the model builds from it is finite and has at least one link per turn.
     let spiral = Spiral::wound(r, b, core);
     prop_assert!(spiral.length().is_finite() && spiral.length() > 0.0);
-    let nodes = spiral.link_nodes(s.links_per_turn);
+    let nodes = spiral.link_nodes(s.discretisation.links_per_turn);
     prop_assert!(nodes.len() >= 2 && nodes.iter().all(|p| p.is_finite()));
     Ok(())
 }

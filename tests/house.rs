@@ -130,7 +130,7 @@ fn functions(text: &str) -> Vec<(String, usize, usize)> {
     let lines: Vec<&str> = text.lines().collect();
     let code = lines
         .iter()
-        .position(|l| l.trim_start().starts_with("mod tests {"))
+        .position(|l| l.trim_start().ends_with("mod tests {"))
         .unwrap_or(lines.len());
     let mut found = Vec::new();
     let mut i = 0;

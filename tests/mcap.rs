@@ -152,13 +152,13 @@ fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
     let total: usize = r.messages.values().map(Vec::len).sum();
     assert_eq!(stats.message_count, total as u64);
     let t_end = logged.report.sim_time_s;
-    let frames_f = (t_end * logged.scene.scene_rate_hz).floor();
+    let frames_f = (t_end * logged.scene.output.scene_rate_hz).floor();
     let frames = frames_f as usize;
     let scene_n = r.messages["/scene"].len();
     assert!(
         (frames + 1..=frames + 2).contains(&scene_n),
         "/scene: {scene_n} messages over {t_end:.4} s at {} Hz, expected {} or {}",
-        logged.scene.scene_rate_hz,
+        logged.scene.output.scene_rate_hz,
         frames + 1,
         frames + 2
     );

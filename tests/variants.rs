@@ -107,7 +107,7 @@ fn yoga_mat_constraint_forces_follow_the_exact_model_and_change_sign_as_a7_says(
     // changes sign earlier than (2/5)^(1/3) R (f = 0.457), as A7 says.
     let s = scene("yoga-mat");
     let (samples, _) = run_kept(&s);
-    let mg = s.tape.mass_kg * s.g_m_s2;
+    let mg = s.tape.mass_kg * s.gravity.g_m_s2;
     for f in [0.1, 0.25, 0.5, 0.75, 0.9] {
         let mean = |g: fn(&Sample) -> f64| window_mean(&samples, f, 0.01, g).unwrap();
         for (what, sim, geo) in [
@@ -460,7 +460,7 @@ fn vertical_tape_follows_eq115_and_leaves_at_its_exit_speed() {
     // The tape speed r theta' follows eq. (115)'s integral; at theta = 2 pi it would be
     // sqrt(2 pi g r + r^2 theta0'^2) (B17). Checked where 95 % hangs.
     let sg = uncoil::theory::rivals::SpoolGeometry::of(&s);
-    let spin = uncoil::theory::rivals::vertical_spin(sg.r_m, s.g_m_s2, sg.spin0_rad_s);
+    let spin = uncoil::theory::rivals::vertical_spin(sg.r_m, s.gravity.g_m_s2, sg.spin0_rad_s);
     let at = samples
         .iter()
         .find(|x| x.laid_fraction >= 0.95)

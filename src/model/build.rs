@@ -122,8 +122,8 @@ pub(super) fn chain_links(spiral: &Spiral, links_per_turn: u32, mass_kg: f64) ->
 pub(super) fn new_world(scene: &Scene) -> (PhysicsWorld, f64, f64) {
     let mut world = PhysicsWorld::new();
     // A slope tilts gravity in the simulation frame; the floor stays the plane y = b/2.
-    let (sin_a, cos_a) = scene.slope_deg.to_radians().sin_cos();
-    let (g_along, g_perp) = (scene.g_m_s2 * sin_a, scene.g_m_s2 * cos_a);
+    let (sin_a, cos_a) = scene.floor.slope_deg.to_radians().sin_cos();
+    let (g_along, g_perp) = (scene.gravity.g_m_s2 * sin_a, scene.gravity.g_m_s2 * cos_a);
     world.gravity = Vector::new(g_along, -g_perp);
     let ip = &mut world.integration_parameters;
     ip.num_solver_iterations = scene.solver.iterations as usize;
@@ -155,7 +155,7 @@ pub(super) fn insert_floor(
     ground: RigidBodyHandle,
 ) -> ColliderHandle {
     // On a fixed axis the tape hangs freely: the floor is put out of its reach.
-    let floor_y = if scene.fixed_axis {
+    let floor_y = if scene.axis.fixed {
         -(spiral.length() + scene.tape.outer_radius_m + 1.0)
     } else {
         0.5 * scene.tape.thickness_m
@@ -163,7 +163,7 @@ pub(super) fn insert_floor(
     world.insert_collider(
         ColliderBuilder::new(SharedShape::halfspace(Vector::Y))
             .translation(Vector::new(0.0, floor_y))
-            .friction(scene.friction)
+            .friction(scene.floor.friction)
             .collision_groups(InteractionGroups::new(
                 FLOOR_GROUP,
                 TAPE_GROUP,
@@ -210,21 +210,21 @@ impl CoilStart {
         let origin = [-p[0], 0.5 * b - p[1] - first.inset_m];
         // Rolling about the contact point at the pushed contact-line speed: x' = omega rho.
         let contact_radius = spiral.curvature_radius(psi_low) * first.chord_ratio;
-        let omega = -scene.push_speed_m_s / contact_radius;
+        let omega = -scene.push.contact_speed_m_s / contact_radius;
         let com_local = mprops.local_com;
         let com = rotate([com_local.x, com_local.y], coil_angle);
         let rel = [origin[0] + com[0], origin[1] + com[1] - 0.5 * b];
         // Without friction nothing can make it roll: it starts spinning in place (App. D),
         // its surface moving at the push speed.
-        let linvel = if scene.friction > 0.0 {
+        let linvel = if scene.floor.friction > 0.0 {
             Vector::new(-omega * rel[1], omega * rel[0])
         } else {
             Vector::ZERO
         };
         // On a fixed axis (App. E) the picture is turned by a quarter turn about the spiral's
         // centre, which stays at the origin: the tape leaves at the right and hangs down.
-        let angle_offset = if scene.fixed_axis { 0.5 * PI } else { 0.0 };
-        let (origin, angle, linvel) = if scene.fixed_axis {
+        let angle_offset = if scene.axis.fixed { 0.5 * PI } else { 0.0 };
+        let (origin, angle, linvel) = if scene.axis.fixed {
             let angle = coil_angle + angle_offset;
             let c = rotate([com_local.x, com_local.y], angle);
             ([0.0, 0.0], angle, Vector::new(-omega * c[1], omega * c[0]))
@@ -269,7 +269,7 @@ pub(super) fn insert_coil(
             .angvel(start.omega)
             .can_sleep(false),
     );
-    if scene.fixed_axis {
+    if scene.axis.fixed {
         world.insert_impulse_joint(
             ground,
             coil,
@@ -280,7 +280,12 @@ pub(super) fn insert_coil(
         );
     }
     let coil_ball = world.insert_collider(
-        Model::ball_builder(spiral, start.psi_low, start.chord_ratio, scene.friction),
+        Model::ball_builder(
+            spiral,
+            start.psi_low,
+            start.chord_ratio,
+            scene.floor.friction,
+        ),
         Some(coil),
     );
     // The engine computes mass properties lazily at the next step; energies are read
@@ -288,7 +293,7 @@ pub(super) fn insert_coil(
     world.bodies[coil].recompute_mass_properties_from_colliders(&world.colliders);
     // A sticky floor holds the coil bilaterally where a floor contact only pushes; the
     // anchors are set by `restick` before the first step.
-    let stick = scene.sticky.then(|| {
+    let stick = scene.floor.sticky.then(|| {
         [JointAxesMask::LIN_X, JointAxesMask::LIN_Y].map(|axis| {
             world.insert_impulse_joint(
                 ground,

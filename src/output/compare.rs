@@ -152,10 +152,10 @@ pub fn table(report: &RunReport, samples: &[Sample]) -> String {
         scene.tape.outer_radius_m,
         scene.tape.thickness_m,
         scene.tape.core_radius_m,
-        scene.push_speed_m_s,
-        scene.friction,
-        scene.slope_deg,
-        scene.g_m_s2,
+        scene.push.contact_speed_m_s,
+        scene.floor.friction,
+        scene.floor.slope_deg,
+        scene.gravity.g_m_s2,
     );
     o.push_str(&paradox(report).markdown());
     let _ = writeln!(o);

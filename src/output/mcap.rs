@@ -225,9 +225,15 @@ impl Observer for McapObserver {
         writer.write_metadata(&metadata(
             "resolution",
             &[
-                ("links_per_turn", scene.links_per_turn.to_string()),
-                ("sample_interval_s", scene.sample_interval_s.to_string()),
-                ("scene_rate_hz", scene.scene_rate_hz.to_string()),
+                (
+                    "links_per_turn",
+                    scene.discretisation.links_per_turn.to_string(),
+                ),
+                (
+                    "sample_interval_s",
+                    scene.output.sample_interval_s.to_string(),
+                ),
+                ("scene_rate_hz", scene.output.scene_rate_hz.to_string()),
             ],
         ))?;
         let s = &scene.solver;
@@ -239,13 +245,6 @@ impl Observer for McapObserver {
                 ("steps_per_link", s.steps_per_link.to_string()),
                 ("iterations", s.iterations.to_string()),
                 ("freeze_speed_m_s", s.freeze_speed_m_s.to_string()),
-                (
-                    "contact_model",
-                    serde_json::to_value(scene.contact_model)?
-                        .as_str()
-                        .unwrap_or_default()
-                        .to_owned(),
-                ),
             ],
         ))?;
         // Schemas and channels go into the first chunk, beside the first messages: written

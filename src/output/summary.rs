@@ -124,7 +124,7 @@ fn bang_summary(o: &mut String, report: &RunReport, bang: &crate::run::BangRepor
             100.0 * crate::run::BANG_SPLIT_MIN_OF_SCALE
         );
     }
-    if report.scene.fixed_axis {
+    if report.scene.axis.fixed {
         let _ = writeln!(
             o,
             "  the tape hangs from its axis with no floor to stop it: still moving {:.3e} J",
@@ -157,14 +157,14 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
         s.tape.outer_radius_m,
         s.tape.thickness_m,
         s.tape.mass_kg,
-        s.push_speed_m_s,
-        s.friction
+        s.push.contact_speed_m_s,
+        s.floor.friction
     );
     let _ = writeln!(
         o,
         "  {} links ({} per turn), {} steps, {:.3} s simulated in {:.3} s wall ({:.3} s to the bang); {}: {}",
         report.links,
-        s.links_per_turn,
+        s.discretisation.links_per_turn,
         report.steps,
         report.sim_time_s,
         report.wall_time_s,

@@ -59,19 +59,19 @@ impl Bounds {
             energy_rise_j: ENERGY_RISE_TOLERANCE
                 * e0_j
                     .abs()
-                    .max(t.mass_kg * scene.g_m_s2 * t.outer_radius_m)
+                    .max(t.mass_kg * scene.gravity.g_m_s2 * t.outer_radius_m)
                     .max(
                         t.mass_kg
-                            * scene.g_m_s2
-                            * scene.slope_deg.to_radians().sin().abs()
+                            * scene.gravity.g_m_s2
+                            * scene.floor.slope_deg.to_radians().sin().abs()
                             * length,
                     ),
             joint_gap_m: (JOINT_GAP_PER_THICKNESS * t.thickness_m)
                 .max(JOINT_GAP_PER_LINK * outer_link_m(scene)),
             penetration_m: PENETRATION_PER_RADIUS * t.outer_radius_m,
             world_radius_m: WORLD_PER_LENGTH * (length + t.outer_radius_m)
-                + scene.push_speed_m_s * scene.stop.max_time_s,
-            floor_in_reach: !scene.fixed_axis,
+                + scene.push.contact_speed_m_s * scene.stop.max_time_s,
+            floor_in_reach: !scene.axis.fixed,
         }
     }
 }
@@ -80,7 +80,7 @@ impl Bounds {
 fn outer_link_m(scene: &Scene) -> f64 {
     let t = &scene.tape;
     2.0 * (t.outer_radius_m - 0.5 * t.thickness_m)
-        * (std::f64::consts::PI / f64::from(scene.links_per_turn)).sin()
+        * (std::f64::consts::PI / f64::from(scene.discretisation.links_per_turn)).sin()
 }
 
 /// Midline length of the scene's tape (m).

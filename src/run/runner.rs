@@ -71,8 +71,8 @@ impl<'s> Runner<'s> {
         let initial = model.observe();
         let e0 = initial.kinetic_j + initial.potential_j;
         let frame_interval =
-            if scene.scene_rate_hz > 0.0 && observers.iter().any(|o| o.wants_frames()) {
-                1.0 / scene.scene_rate_hz
+            if scene.output.scene_rate_hz > 0.0 && observers.iter().any(|o| o.wants_frames()) {
+                1.0 / scene.output.scene_rate_hz
             } else {
                 f64::INFINITY
             };
@@ -82,9 +82,10 @@ impl<'s> Runner<'s> {
             guard: Guard::new(scene, e0),
             limits: Applicability::new(scene, &refs.exact),
             approach: Approach {
-                peak_xdot_m_s: scene.push_speed_m_s,
+                peak_xdot_m_s: scene.push.contact_speed_m_s,
                 peak_r_m: scene.tape.outer_radius_m,
-                peak_xdot_geo_m_s: (!refs.exact.is_sliding()).then_some(scene.push_speed_m_s),
+                peak_xdot_geo_m_s: (!refs.exact.is_sliding())
+                    .then_some(scene.push.contact_speed_m_s),
                 exact_curve: Vec::new(),
                 eq7_curve: Vec::new(),
             },
@@ -98,7 +99,7 @@ impl<'s> Runner<'s> {
             steps: 0,
             prev: None,
             prev_logged: false,
-            xdot: scene.push_speed_m_s,
+            xdot: scene.push.contact_speed_m_s,
             next_sample: 0.0,
             bang: None,
             max_gap: 0.0,
@@ -253,7 +254,7 @@ impl<'s> Runner<'s> {
             for o in observers.iter_mut() {
                 o.observe_sample(&sample)?;
             }
-            self.next_sample = obs.t_s + self.scene.sample_interval_s;
+            self.next_sample = obs.t_s + self.scene.output.sample_interval_s;
             // The bang is over in a few milliseconds of its start: sample it at times since
             // the release growing geometrically from one step, up to the sample interval.
             if let Some((t_bang, _)) = self.bang {
@@ -350,7 +351,7 @@ impl<'s> Runner<'s> {
             ),
         };
         let t = &self.scene.tape;
-        let mgr_j = t.mass_kg * self.scene.g_m_s2 * t.outer_radius_m;
+        let mgr_j = t.mass_kg * self.scene.gravity.g_m_s2 * t.outer_radius_m;
         Ledger {
             e0_j: self.e0,
             mgr_j,

@@ -90,7 +90,7 @@ pub(super) fn check(s: &Scene) -> Result<(), SceneError> {
             ),
         ));
     }
-    let links = links(&s.tape, s.links_per_turn);
+    let links = links(&s.tape, s.discretisation.links_per_turn);
     let per_link = s.solver.steps_per_link;
     if links * per_link > MAX_ENGINE_STEPS {
         return Err(invalid(
@@ -118,11 +118,11 @@ pub(super) fn check(s: &Scene) -> Result<(), SceneError> {
             ),
         ));
     }
-    let every = s.sample_interval_s.max(dt);
+    let every = s.output.sample_interval_s.max(dt);
     if t_max / every > MAX_SAMPLES {
         return Err(invalid(
             "output.sample_interval_s",
-            Shown(s.sample_interval_s),
+            Shown(s.output.sample_interval_s),
             format!(
                 "must be >= stop.max_time_s / {MAX_SAMPLES:e} (= {}): a run may write at most \
                  {MAX_SAMPLES:e} samples, and stop.max_time_s = {t_max} s sampled every \
@@ -133,7 +133,7 @@ pub(super) fn check(s: &Scene) -> Result<(), SceneError> {
             ),
         ));
     }
-    let rate = s.scene_rate_hz;
+    let rate = s.output.scene_rate_hz;
     let drawn = t_max * rate.min(1.0 / dt) * (links + 1.0);
     if drawn > MAX_FRAME_NODES {
         return Err(invalid(
@@ -183,13 +183,13 @@ mod tests {
     fn shares(s: &Scene) -> [f64; 5] {
         let t = s.stop.max_time_s;
         let dt = s.solver.max_dt_s;
-        let n = links(&s.tape, s.links_per_turn);
+        let n = links(&s.tape, s.discretisation.links_per_turn);
         [
             t / dt / MAX_ENGINE_STEPS,
             n * s.solver.steps_per_link / MAX_ENGINE_STEPS,
             n / MAX_LINKS,
-            t / s.sample_interval_s.max(dt) / MAX_SAMPLES,
-            t * s.scene_rate_hz.min(1.0 / dt) * (n + 1.0) / MAX_FRAME_NODES,
+            t / s.output.sample_interval_s.max(dt) / MAX_SAMPLES,
+            t * s.output.scene_rate_hz.min(1.0 / dt) * (n + 1.0) / MAX_FRAME_NODES,
         ]
     }
 

@@ -8,8 +8,6 @@
 
 use serde::Deserialize;
 
-use crate::scene::ContactModel;
-
 /// Every key a scene file may set, with its section path (`section.key`), in the order of
 /// the file's sections: the one list the fuzz tests and the override tests draw from. A
 /// test checks that it equals the keys the serde mirror accepts.
@@ -98,8 +96,9 @@ pub(super) struct SceneFile {
     pub(super) push: PushFile,
     #[serde(default)]
     pub(super) solver: SolverFile,
-    #[serde(default)]
-    pub(super) contact: ContactFile,
+    /// Read so that older files load, and checked, but it selects nothing.
+    #[serde(default, rename = "contact")]
+    pub(super) _contact: ContactFile,
     #[serde(default)]
     pub(super) stop: StopFile,
     #[serde(default)]
@@ -217,6 +216,17 @@ pub(super) struct ContactFile {
     pub(super) model: ContactModel,
 }
 
+/// `[contact] model`, kept so that older scene files load: the coil always touches the
+/// floor through the curved contact refitted to the spiral (see the model), and
+/// `"spiral"`, the only value, selects nothing. Any other value is refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub(super) enum ContactModel {
+    /// The curved contact on the spiral (`"spiral"`).
+    #[default]
+    Spiral,
+}
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub(super) struct StopFile {
@@ -275,19 +285,18 @@ mod tests {
         let s = Scene::from_toml_str(MINIMAL, "fallback").unwrap();
         assert_eq!(s.name, "fallback");
         assert_relative_eq!(s.tape.core_radius_m, 0.0);
-        assert_eq!(s.links_per_turn, 32);
-        assert_relative_eq!(s.friction, 1.0);
-        assert_relative_eq!(s.g_m_s2, 9.81);
+        assert_eq!(s.discretisation.links_per_turn, 32);
+        assert_relative_eq!(s.floor.friction, 1.0);
+        assert_relative_eq!(s.gravity.g_m_s2, 9.81);
         assert_relative_eq!(s.solver.max_dt_s, 0.001);
         assert_relative_eq!(s.solver.steps_per_link, 4.0);
         assert_eq!(s.solver.iterations, 4);
         assert_relative_eq!(s.solver.freeze_speed_m_s, 0.001);
-        assert_eq!(s.contact_model, ContactModel::Spiral);
         assert_relative_eq!(s.stop.bang_radius_m, 2.0 * 0.005);
         assert_relative_eq!(s.stop.max_time_s, 60.0);
         assert_relative_eq!(s.stop.bang_cap_s, 2.0);
         assert_relative_eq!(s.stop.rest_fraction, 0.001);
-        assert_relative_eq!(s.sample_interval_s, 0.001);
+        assert_relative_eq!(s.output.sample_interval_s, 0.001);
         assert_eq!(s.source_text, MINIMAL);
     }
 
@@ -331,6 +340,22 @@ mod tests {
         let msg = err(&with("contact", "model", "\"bristle\""));
         assert!(msg.contains("unknown variant `bristle`"), "{msg}");
         assert!(msg.contains("spiral"), "{msg}");
+    }
+
+    #[test]
+    fn an_older_file_with_its_contact_model_still_loads_to_the_same_scene() {
+        let old = Scene::from_toml_str(&with("contact", "model", "\"spiral\""), "t").unwrap();
+        let new = Scene::from_toml_str(MINIMAL, "t").unwrap();
+        assert_eq!(
+            Scene {
+                source_text: String::new(),
+                ..old
+            },
+            Scene {
+                source_text: String::new(),
+                ..new
+            }
+        );
     }
 
     /// The keys serde names as expected when `key` (dotted) is unknown: the fields of its

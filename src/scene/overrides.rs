@@ -212,7 +212,7 @@ mod tests {
             ],
         )
         .unwrap();
-        assert_eq!(s.links_per_turn, 16);
+        assert_eq!(s.discretisation.links_per_turn, 16);
         assert!((s.solver.max_dt_s - 5e-4).abs() < 1e-18);
         assert!(s.stop.bang_cap_s.abs() < 1e-18);
         assert!(s.source_text.starts_with(YOGA));
@@ -229,14 +229,14 @@ mod tests {
     #[test]
     fn an_integer_is_accepted_for_a_float_key() {
         let s = scene_with_overrides(YOGA, "y", &[ov("gravity.g_m_s2=10")]).unwrap();
-        assert!((s.g_m_s2 - 10.0).abs() < 1e-12);
+        assert!((s.gravity.g_m_s2 - 10.0).abs() < 1e-12);
     }
 
     #[test]
     fn a_missing_section_is_created() {
         let text = "[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\nmass_kg = 1.5\n";
         let s = scene_with_overrides(text, "t", &[ov("push.contact_speed_m_s=0.2")]).unwrap();
-        assert!((s.push_speed_m_s - 0.2).abs() < 1e-12);
+        assert!((s.push.contact_speed_m_s - 0.2).abs() < 1e-12);
     }
 
     #[test]

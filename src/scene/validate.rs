@@ -12,7 +12,9 @@ use crate::scene::budget::{self, MAX_LINKS};
 use crate::scene::file::{
     DiscretisationFile, FloorFile, OutputFile, PushFile, SceneFile, SolverFile, StopFile, TapeFile,
 };
-use crate::scene::{Scene, SceneError, Solver, Stop, Tape};
+use crate::scene::{
+    Axis, Discretisation, Floor, Gravity, Output, Push, Scene, SceneError, Solver, Stop, Tape,
+};
 
 /// Bounds of `discretisation.links_per_turn`.
 const LINKS_PER_TURN_RANGE: RangeInclusive<i64> = 3..=4096;
@@ -110,18 +112,25 @@ impl Scene {
         let scene = Scene {
             name,
             tape,
-            links_per_turn,
-            friction,
-            slope_deg,
-            sticky: file.floor.sticky,
-            fixed_axis: file.axis.fixed,
-            g_m_s2,
-            push_speed_m_s,
+            discretisation: Discretisation { links_per_turn },
+            floor: Floor {
+                friction,
+                slope_deg,
+                sticky: file.floor.sticky,
+            },
+            gravity: Gravity { g_m_s2 },
+            push: Push {
+                contact_speed_m_s: push_speed_m_s,
+            },
+            axis: Axis {
+                fixed: file.axis.fixed,
+            },
             solver,
-            contact_model: file.contact.model,
             stop,
-            sample_interval_s,
-            scene_rate_hz,
+            output: Output {
+                sample_interval_s,
+                scene_rate_hz,
+            },
             source_text: text.to_owned(),
         };
         budget::check(&scene)?;

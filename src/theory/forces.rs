@@ -46,7 +46,7 @@ pub fn force_reference(scene: &Scene) -> Option<ForceFn> {
             }))
         }
         Case::Slope => {
-            let a = scene.slope_deg.to_radians();
+            let a = scene.floor.slope_deg.to_radians();
             let rdot = slope_energy_rdot(p, a);
             Some(Box::new(move |f| {
                 let r = radius(f);

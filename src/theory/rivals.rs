@@ -58,10 +58,10 @@ impl Case {
     pub fn of(scene: &Scene) -> Self {
         let t = &scene.tape;
         let spool = t.core_radius_m > 0.0;
-        if scene.fixed_axis {
+        if scene.axis.fixed {
             return Case::Vertical;
         }
-        if scene.friction <= 0.0 {
+        if scene.floor.friction <= 0.0 {
             return if spool {
                 Case::FrictionlessSpool
             } else {
@@ -76,9 +76,9 @@ impl Case {
                 Case::Spool
             };
         }
-        if scene.slope_deg.abs() > 0.0 {
+        if scene.floor.slope_deg.abs() > 0.0 {
             Case::Slope
-        } else if scene.g_m_s2 <= 0.0 {
+        } else if scene.gravity.g_m_s2 <= 0.0 {
             Case::ZeroG
         } else {
             Case::Coil
@@ -162,7 +162,7 @@ impl SpoolGeometry {
         Self {
             r_m,
             l_m: s.length(),
-            spin0_rad_s: scene.push_speed_m_s / r_m,
+            spin0_rad_s: scene.push.contact_speed_m_s / r_m,
         }
     }
 }
@@ -358,7 +358,7 @@ fn torque_form_rdot(p: Params, slope_rad: f64, k: f64) -> impl Fn(f64) -> f64 {
 }
 
 fn slope_rivals(scene: &Scene, p: Params, model: Rc<ExactGeometry>) -> Vec<Rival> {
-    let a = scene.slope_deg.to_radians();
+    let a = scene.floor.slope_deg.to_radians();
     let big_r = p.outer_radius_m;
     vec![
         exact(model, true),

@@ -182,8 +182,8 @@ pub fn force_table(report: &RunReport, samples: &[Sample]) -> String {
 /// fractions, and its largest spread about a line over a window, in units of `M g` (with
 /// no gravity, of the largest force simulated).
 fn force_gaps(scene: &Scene, samples: &[Sample]) -> String {
-    let (mg, unit) = if scene.g_m_s2 > 0.0 {
-        (scene.tape.mass_kg * scene.g_m_s2, "M g")
+    let (mg, unit) = if scene.gravity.g_m_s2 > 0.0 {
+        (scene.tape.mass_kg * scene.gravity.g_m_s2, "M g")
     } else {
         let n = FORCE_FRACTIONS
             .iter()
@@ -197,7 +197,7 @@ fn force_gaps(scene: &Scene, samples: &[Sample]) -> String {
         (n.max(f64::MIN_POSITIVE), "the largest force")
     };
     // A sticky floor holds the coil by a joint, which the simulation books in F_int.
-    let pairs = if scene.sticky { 2 } else { 4 };
+    let pairs = if scene.floor.sticky { 2 } else { 4 };
     let (mut gap, mut spread) = ([None::<f64>; 4], [None::<f64>; 4]);
     for f in FORCE_FRACTIONS {
         for (k, &(sim, geo)) in FORCE_PAIRS.iter().enumerate().take(pairs) {
@@ -232,14 +232,14 @@ fn force_gaps(scene: &Scene, samples: &[Sample]) -> String {
 fn force_notes(report: &RunReport, samples: &[Sample]) -> String {
     let scene = &report.scene;
     let mut o = String::new();
-    if scene.sticky {
+    if scene.floor.sticky {
         let _ = writeln!(
             o,
             "On a sticky floor the hold is a joint, not a contact: the simulation books it in \
              F_int, so F and F_int are not compared."
         );
     }
-    if let (Some(f), false) = (report.geo_hop_fraction, scene.sticky) {
+    if let (Some(f), false) = (report.geo_hop_fraction, scene.floor.sticky) {
         let _ = writeln!(
             o,
             "The exact model needs a floor that pulls (N_tot < 0) from f = {f:.4} on: there it \
@@ -270,9 +270,9 @@ fn eq11_against_eq30(report: &RunReport, samples: &[Sample]) -> String {
         scene.tape.outer_radius_m,
         scene.tape.thickness_m,
         scene.tape.mass_kg,
-        scene.g_m_s2,
+        scene.gravity.g_m_s2,
     );
-    let rdot0 = b * scene.push_speed_m_s / (2.0 * PI * big_r);
+    let rdot0 = b * scene.push.contact_speed_m_s / (2.0 * PI * big_r);
     let mut o = String::new();
     let _ = writeln!(
         o,
@@ -314,7 +314,7 @@ fn eq11_against_eq30(report: &RunReport, samples: &[Sample]) -> String {
 pub fn torque_table(report: &RunReport, samples: &[Sample]) -> String {
     let scene = &report.scene;
     let mut o = String::new();
-    let slope = scene.slope_deg.to_radians();
+    let slope = scene.floor.slope_deg.to_radians();
     let _ = writeln!(
         o,
         "\nThe torque paradox about the origin (the laid tape's outer end), counter-clockwise, \
@@ -364,7 +364,7 @@ pub fn torque_table(report: &RunReport, samples: &[Sample]) -> String {
             let m = scene.tape.mass_kg;
             row.push(format!(
                 "{:.5}",
-                -m * r.f * scene.g_m_s2 * scene.tape.thickness_m * slope.sin() / 2.0
+                -m * r.f * scene.gravity.g_m_s2 * scene.tape.thickness_m * slope.sin() / 2.0
             ));
         }
         table.push(row);
@@ -450,7 +450,7 @@ fn torque_verdict(scene: &Scene, samples: &[Sample], rows: &[TorqueRow]) -> Stri
         worst_geo.map_or("-".into(), |w| format!("{:.2} %", 100.0 * w)),
         100.0 * e14,
         100.0 * e16,
-        if scene.g_m_s2 > 0.0 {
+        if scene.gravity.g_m_s2 > 0.0 {
             format!(
                 " The spiral's off-centre mass makes {:.0}-{:.0} % of eq. (16)'s gap; the \
                  rest is the floor's and the laid tape's forces at their own points.",
@@ -463,7 +463,7 @@ fn torque_verdict(scene: &Scene, samples: &[Sample], rows: &[TorqueRow]) -> Stri
                 .to_string()
         },
     );
-    if scene.slope_deg != 0.0 {
+    if scene.floor.slope_deg != 0.0 {
         let _ = writeln!(
             o,
             "C1's couple acts on the laid tape, not on the moving part: the simulation's \

@@ -56,7 +56,7 @@ pub fn vertical_spin(r: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 {
 
 pub(super) fn vertical_rivals(scene: &Scene) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
-    let (r, g, w0) = (sg.r_m, scene.g_m_s2, sg.spin0_rad_s);
+    let (r, g, w0) = (sg.r_m, scene.gravity.g_m_s2, sg.spin0_rad_s);
     let spin = vertical_spin(r, g, w0);
     let theta_end = 2.0 * PI * F_END;
     // Eq. (124), the control-volume Lagrangian of E.3.2: theta'' (1 - theta / 2 pi) =
@@ -95,7 +95,7 @@ pub(super) fn vertical_rivals(scene: &Scene) -> Vec<Rival> {
 
 pub(super) fn single_turn_rivals(scene: &Scene, model: Rc<ExactGeometry>) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
-    let (r, g, w0) = (sg.r_m, scene.g_m_s2, sg.spin0_rad_s);
+    let (r, g, w0) = (sg.r_m, scene.gravity.g_m_s2, sg.spin0_rad_s);
     let spin = single_turn_spin(r, g, w0);
     let theta_end = 2.0 * PI * F_END;
     let n = 200_000;
@@ -134,7 +134,7 @@ pub type Spin = Box<dyn Fn(f64) -> f64>;
 /// right integral even when its times do not. Empty for the other cases.
 pub fn spool_spins(scene: &Scene) -> Vec<(String, Spin)> {
     let sg = SpoolGeometry::of(scene);
-    let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.g_m_s2, sg.spin0_rad_s);
+    let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.gravity.g_m_s2, sg.spin0_rad_s);
     match Case::of(scene) {
         Case::Spool => {
             let rate = spool_rate(r, l, g, w0);
@@ -165,7 +165,7 @@ pub fn spool_time_from_rest(r: f64, l: f64, g: f64, u: f64) -> f64 {
 
 pub(super) fn spool_rivals(scene: &Scene, model: Rc<ExactGeometry>) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
-    let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.g_m_s2, sg.spin0_rad_s);
+    let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.gravity.g_m_s2, sg.spin0_rad_s);
     vec![
         exact(model, true),
         eq79_rival(scene),
@@ -193,7 +193,7 @@ pub(super) fn spool_rivals(scene: &Scene, model: Rc<ExactGeometry>) -> Vec<Rival
 /// Eq. (79) as a rival, through its energy integral (78) per ERRATA A15.
 fn eq79_rival(scene: &Scene) -> Rival {
     let sg = SpoolGeometry::of(scene);
-    let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.g_m_s2, sg.spin0_rad_s);
+    let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.gravity.g_m_s2, sg.spin0_rad_s);
     let rate = spool_rate(r, l, g, w0);
     from_rate(
         "eq.79",
@@ -225,7 +225,7 @@ fn eq104_spin(r: f64, l: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 {
 
 pub(super) fn frictionless_spool_rivals(scene: &Scene, model: Rc<ExactGeometry>) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
-    let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.g_m_s2, sg.spin0_rad_s);
+    let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.gravity.g_m_s2, sg.spin0_rad_s);
     vec![
         exact(model, true),
         from_rate(
