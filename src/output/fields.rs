@@ -87,7 +87,6 @@ macro_rules! refuse_shapes {
 macro_rules! numbers {
     ($($method:ident($ty:ty)),*) => {
         $(
-            #[allow(clippy::cast_lossless, clippy::cast_precision_loss)]
             fn $method(self, v: $ty) -> Result<f64, NotFlat> {
                 Ok(v as f64)
             }

@@ -204,9 +204,7 @@ fn discretisation(d: &DiscretisationFile, tape: &Tape) -> Result<u32, SceneError
     let key = "discretisation.links_per_turn";
     let raw = d.links_per_turn;
     let outer_arc_m = 2.0 * std::f64::consts::PI * (r - b / 2.0);
-    #[allow(clippy::cast_possible_truncation)]
     let coarsest = ((outer_arc_m / r).ceil() as i64).max(*LINKS_PER_TURN_RANGE.start());
-    #[allow(clippy::cast_precision_loss)]
     let too_long = |n: i64| {
         let outer_link_m = outer_arc_m / n as f64;
         invalid(

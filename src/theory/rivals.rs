@@ -392,13 +392,11 @@ fn slope_rivals(scene: &Scene, p: Params, model: Rc<ExactGeometry>) -> Vec<Rival
 /// `w(theta)` from `dw/dtheta = dw(theta, w)` and `w(0) = w0`, by RK4 on `n` uniform steps
 /// up to `theta_end`.
 fn tabulate_w(w0: f64, theta_end: f64, n: usize, dw: impl Fn(f64, f64) -> f64) -> Vec<f64> {
-    #[allow(clippy::cast_precision_loss)]
     let h = theta_end / n as f64;
     let mut w = w0;
     let mut out = Vec::with_capacity(n + 1);
     out.push(w);
     for k in 0..n {
-        #[allow(clippy::cast_precision_loss)]
         let t = h * k as f64;
         let k1 = dw(t, w);
         let k2 = dw(t + 0.5 * h, w + 0.5 * h * k1);
@@ -413,12 +411,9 @@ fn tabulate_w(w0: f64, theta_end: f64, n: usize, dw: impl Fn(f64, f64) -> f64) -
 /// Linear interpolation of a [`tabulate_w`] table, as `sqrt(w)` at `theta`.
 fn table_spin(table: Vec<f64>, theta_end: f64) -> impl Fn(f64) -> f64 {
     let n = table.len() - 1;
-    #[allow(clippy::cast_precision_loss)]
     let h = theta_end / n as f64;
     move |theta: f64| {
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
         let k = ((theta / h).floor().max(0.0) as usize).min(n - 1);
-        #[allow(clippy::cast_precision_loss)]
         let s = theta / h - k as f64;
         ((1.0 - s) * table[k] + s * table[k + 1]).sqrt()
     }

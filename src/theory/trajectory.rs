@@ -20,14 +20,12 @@ pub(crate) struct Trajectory {
 impl Trajectory {
     pub(crate) fn new(q0: f64, q_end: f64, panels: usize, rate: impl Fn(f64) -> f64) -> Self {
         let u_end = (q0 - q_end).max(0.0).sqrt();
-        #[allow(clippy::cast_precision_loss)]
         let du = u_end / panels as f64;
         let dtdu = |u: f64| 2.0 * u / rate(q0 - u * u);
         let mut nodes = Vec::with_capacity(panels + 1);
         let mut t = 0.0;
         nodes.push([0.0, 0.0, 0.0]);
         for k in 0..panels {
-            #[allow(clippy::cast_precision_loss)]
             let lo = du * k as f64;
             t += gauss5(lo, lo + du, dtdu);
             nodes.push([lo + du, t, dtdu(lo + du)]);
