@@ -30,7 +30,7 @@ use std::collections::VecDeque;
 use std::f64::consts::PI;
 
 use rapier2d_f64::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::scene::Scene;
 use crate::spiral::{Spiral, SpiralMoments, rotate};
@@ -47,7 +47,7 @@ pub use impulses::{AngularImpulses, StepImpulses};
 pub use work::BangLedger;
 
 /// What ended the final bang.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum BangEnd {
     /// The moving tape's energy above lying at rest on the floor (kinetic, plus its weight
@@ -81,7 +81,7 @@ pub struct BangRecord {
 use work::{BodyState, Moved};
 
 /// Where the energy went, each part measured where it happens (J).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct EnergyLedger {
     /// Lost inside engine steps while the coil rolls (contacts, joints, integration).
     pub step_j: f64,

@@ -159,6 +159,21 @@ pub struct Scene {
     pub source_text: String,
 }
 
+/// A scene read back (from a report) is parsed again from its own text and name, so it meets
+/// the same validation as one loaded from its file: parse, don't validate.
+impl<'de> serde::Deserialize<'de> for Scene {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        /// What a serialised scene carries that makes it: its name and its file's text.
+        #[derive(serde::Deserialize)]
+        struct Written {
+            name: String,
+            source_text: String,
+        }
+        let w = Written::deserialize(d)?;
+        Scene::from_toml_str(&w.source_text, &w.name).map_err(serde::de::Error::custom)
+    }
+}
+
 /// `[discretisation]`: how finely the tape is cut into links.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Discretisation {

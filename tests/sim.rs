@@ -90,6 +90,22 @@ fn same_scene_gives_the_same_bytes() {
     );
 }
 
+#[test]
+fn a_report_reads_back_through_its_type() {
+    // report.json is written from RunReport and read back into it (its scene parsed again
+    // from its own text): the round trip gives the same JSON.
+    let d = tempfile::tempdir().unwrap();
+    let mut json = uncoil::output::ReportObserver::new(d.path());
+    let report = run(&yoga_mat(), &mut [&mut json]).unwrap();
+    let text = std::fs::read_to_string(d.path().join("report.json")).unwrap();
+    let back: uncoil::run::RunReport = serde_json::from_str(&text).unwrap();
+    assert_eq!(back.scene, report.scene);
+    assert_eq!(
+        serde_json::to_string(&back).unwrap(),
+        serde_json::to_string(&report).unwrap()
+    );
+}
+
 /// FNV-1a, 64 bits: a hash that is the same on every platform and Rust release.
 fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {

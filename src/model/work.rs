@@ -28,7 +28,7 @@ use rapier2d_f64::prelude::*;
 
 /// Energy dissipated since the final bang began, by mechanism (J; positive = dissipated).
 /// The parts sum to the energy the bang dissipated (`residual_j` closes the sum).
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BangLedger {
     /// Work done against the floor's normal impulses: inelastic impacts and the contact's
     /// own compliance.

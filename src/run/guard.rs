@@ -6,7 +6,7 @@
 //! The bounds are stated here and copied into `report.json` (`bounds`), so a reader of a
 //! report knows what "stopped" was measured against.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::model::{Health, Observation};
 use crate::run::stop::{GuardKind, GuardTrip};
@@ -35,7 +35,7 @@ pub const PENETRATION_PER_RADIUS: f64 = 0.25;
 pub const WORLD_PER_LENGTH: f64 = 10.0;
 
 /// The guards' bounds for one scene, in the scene's units.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Bounds {
     /// Largest allowed rise of the total energy above E0 (J).
     pub energy_rise_j: f64,

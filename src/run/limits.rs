@@ -3,7 +3,7 @@
 //! model's speed; judged against the rolling or, on a frictionless floor, the sliding exact
 //! model. It reads the model's observations; it stops nothing and writes nothing.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::model::{Health, Observation, Phase};
 use crate::run::guard::tape_length_m;
@@ -28,7 +28,7 @@ pub const CONSECUTIVE_STEPS: u32 = 20;
 pub const CONTINUUM_RADIUS_PER_THICKNESS: f64 = 3.0;
 
 /// Why a reference stops describing the run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum LimitKind {
     /// The rolling contact slips: the references assume rolling without slip.
@@ -50,7 +50,7 @@ pub enum LimitKind {
 }
 
 /// Where and why a reference stops applying.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ReferenceLimit {
     /// Which condition.
     pub kind: LimitKind,

@@ -4,6 +4,8 @@
 
 use std::fmt;
 
+use serde::{Deserialize, Serialize};
+
 use crate::model::Observation;
 use crate::run::report::{Milestone, RivalTimes};
 use crate::scene::Scene;
@@ -13,7 +15,8 @@ use crate::theory::References;
 pub const SPOOL_FRACTIONS: [f64; 4] = [0.25, 0.5, 0.75, 0.9];
 
 /// Which milestone a time is taken at; its text is its label (`0.5R`, `2b`, `f=0.25`).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum MilestoneKey {
     /// The equivalent radius at this fraction of the outer radius R (`0.5R`).
     OfRadius(f64),

@@ -2,7 +2,7 @@
 //! the final bang's observables and the approach to it. Plain data for JSON, the summary
 //! and the tables; built by the loop at the run's end.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::model::{BangEnd, EnergyLedger};
 use crate::run::guard::Bounds;
@@ -13,10 +13,9 @@ use crate::scene::Scene;
 use crate::theory::References;
 
 /// One milestone: the coil at a given continuum-equivalent radius.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Milestone {
     /// Which milestone.
-    #[serde(skip)]
     pub key: MilestoneKey,
     /// Its label, e.g. `0.5R` or `2b` (the key's text).
     pub label: String,
@@ -51,7 +50,7 @@ pub struct Milestone {
 }
 
 /// Where the energy went over the whole run.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Ledger {
     /// Initial energy, kinetic plus potential above the floor (J).
     pub e0_j: f64,
@@ -97,7 +96,7 @@ impl Ledger {
 
 /// The final bang: what it received, how violent it was, how long it took, where the tape
 /// ended.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct BangReport {
     /// Kinetic energy of the tape at the release (J).
     pub kinetic_in_j: f64,
@@ -123,7 +122,7 @@ pub struct BangReport {
 
 /// The approach to the bang: how far the contact line's speed diverged before the coil was
 /// released (eq. 7's x' ~ 1/r as r -> 0).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Approach {
     /// Fastest contact-line speed while the coil rolled (m/s).
     pub peak_xdot_m_s: f64,
@@ -168,7 +167,7 @@ impl Approach {
 
 /// One of the paper's rivals for the scene's case at the run's milestones: the theory's
 /// verdict, computed once with the run's references and carried to the tables.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RivalTimes {
     /// Short column label, e.g. `eq.72 A11`.
     pub label: String,
@@ -185,7 +184,7 @@ pub struct RivalTimes {
 }
 
 /// Everything a run produced, for JSON and the summary.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RunReport {
     /// The validated scene.
     pub scene: Scene,
