@@ -255,11 +255,21 @@ fn check_runs_a_folder_and_tabulates_every_outcome() {
         .assert()
         .code(0);
     let stdout = String::from_utf8_lossy(&assert.get_output().stdout).into_owned();
+    // The table's rows: the case, then its outcome.
+    for (case, outcome) in [
+        ("coarse-step", "stopped"),
+        ("coarsest-links", "completed"),
+        ("frictionless", "completed"),
+        ("one-link-per-turn", "rejected"),
+    ] {
+        let row: Vec<&str> = stdout
+            .lines()
+            .map(|l| l.split_whitespace().collect::<Vec<_>>())
+            .find(|w| w.first() == Some(&case))
+            .unwrap_or_else(|| panic!("no row for {case}:\n{stdout}"));
+        assert_eq!(row[1], outcome, "{case}:\n{stdout}");
+    }
     for want in [
-        "coarse-step          stopped",
-        "coarsest-links       completed",
-        "frictionless         completed",
-        "one-link-per-turn    rejected",
         "slip (r=",
         "coarse-step: stopped: joints separating",
         "one-link-per-turn: rejected: discretisation.links_per_turn = 1: a link must be shorter \

@@ -266,3 +266,69 @@ impl Model {
         out
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::tests::yoga;
+
+    #[test]
+    fn impulses_on_the_moving_part_have_the_papers_signs_and_close_the_momentum_balance() {
+        // Early in the unroll: the floor holds the coil up (N > 0, about M g) and the total
+        // horizontal force points along +x, where the coil goes (eq. 11 before its sign
+        // change); the laid tape's share is what the momentum balance leaves of the floor's.
+        let mut model = Model::new(&yoga());
+        let (mut sum, mut time) = (StepImpulses::default(), 0.0);
+        for _ in 0..300 {
+            let o = model.step();
+            sum.add(&o.impulses);
+            time += o.dt_s;
+        }
+        let weight = 1.5 * 9.81;
+        let n = sum.floor_on_coil[1] / time;
+        assert!((n / weight - 1.0).abs() < 0.15, "N = {n} N");
+        assert!(sum.total[0] > 0.0, "F_tot = {} N", sum.total[0] / time);
+        let laid = sum.laid();
+        assert!(
+            (laid[0] + sum.floor_on_coil[0] - sum.total[0]).abs() < 1e-15,
+            "F + F_int != F_tot"
+        );
+        // The floor's force on everything that moves includes the coil's.
+        assert!(sum.floor_on_moving[1] >= sum.floor_on_coil[1]);
+    }
+
+    #[test]
+    fn engine_reports_a_velocity_that_keeps_the_last_substeps_gravity() {
+        // On a resting contact the velocity the engine reports after a step is not the one
+        // it moved the body by: it keeps gravity's pull of the last substep, g dt / substeps.
+        // This is why `L_O` is taken from how far the bodies moved. `cargo test --release
+        // --lib engine_reports -- --nocapture` prints the figures.
+        let mut model = Model::new(&yoga());
+        model.set_shedding(false);
+        for _ in 0..300 {
+            model.step();
+        }
+        let coil = model.coil.unwrap();
+        let (mut moved, mut reported, mut dt) = (0.0, 0.0, 0.0);
+        for _ in 0..100 {
+            let c0 = model.world.bodies[coil].center_of_mass();
+            let o = model.step();
+            let body = &model.world.bodies[coil];
+            moved += body.center_of_mass().y - c0.y;
+            reported += body.linvel().y * o.dt_s;
+            dt += o.dt_s;
+        }
+        let substeps = model.world.integration_parameters.num_solver_iterations as f64;
+        let lag = (reported - moved) / dt;
+        let expected = -9.81 * model.last_dt / substeps;
+        eprintln!(
+            "coil moved {:.3e} m/s, reported {:.3e} m/s: lag {lag:.3e} m/s, g dt / {substeps} = {expected:.3e} m/s",
+            moved / dt,
+            reported / dt
+        );
+        assert!(
+            (lag / expected - 1.0).abs() < 0.2,
+            "lag {lag}, expected {expected}"
+        );
+    }
+}

@@ -38,8 +38,9 @@ impl Table {
         o
     }
 
-    /// As plain text, each line led by `indent`: the first column aligned left, the others
-    /// right, each as wide as its widest cell, two spaces apart.
+    /// As plain text, each line led by `indent`, each column as wide as its widest cell,
+    /// two spaces apart: numbers aligned right, words (the first column, and any column with
+    /// a cell that does not start with a number) left.
     pub fn text(&self, indent: &str) -> String {
         let widths: Vec<usize> = (0..self.header.len())
             .map(|c| {
@@ -51,13 +52,22 @@ impl Table {
                     .unwrap_or(0)
             })
             .collect();
+        let left: Vec<bool> = (0..self.header.len())
+            .map(|c| {
+                c == 0
+                    || !self
+                        .rows
+                        .iter()
+                        .all(|r| r.get(c).is_none_or(|s| numeric(s)))
+            })
+            .collect();
         let line = |cells: &[String]| {
             let padded: Vec<String> = cells
                 .iter()
                 .zip(&widths)
                 .enumerate()
                 .map(|(c, (s, &w))| {
-                    if c == 0 {
+                    if left[c] {
                         format!("{s:<w$}")
                     } else {
                         format!("{s:>w$}")
@@ -72,6 +82,12 @@ impl Table {
         }
         o
     }
+}
+
+/// Whether a cell reads as a number: its first word parses as one, or it is a dash.
+fn numeric(cell: &str) -> bool {
+    let first = cell.split_whitespace().next().unwrap_or("");
+    first == "-" || first.trim_end_matches('%').parse::<f64>().is_ok()
 }
 
 #[cfg(test)]
@@ -90,6 +106,17 @@ mod tests {
         assert_eq!(
             sample().markdown(),
             "| r | sim s | eq.7 s |\n|---|---|---|\n| 0.5R | 2.0734 | 2.2341 |\n| 2b | 2.2602 | - |\n"
+        );
+    }
+
+    #[test]
+    fn text_aligns_words_left_and_numbers_right() {
+        let mut t = Table::new(["case", "outcome", "wall s"]);
+        t.push(["yoga", "completed", "0.07"]);
+        t.push(["coarse-step", "stopped", "-"]);
+        assert_eq!(
+            t.text(""),
+            "case         outcome    wall s\nyoga         completed    0.07\ncoarse-step  stopped         -\n"
         );
     }
 

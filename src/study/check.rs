@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 
+use crate::output::table::Table;
 use crate::output::{CSV_COLUMNS, CsvObserver, ReportObserver};
 use crate::run::limits::label;
 use crate::run::stop::{Status, StopReason};
@@ -140,60 +141,25 @@ pub fn verify_outputs(dir: &Path) -> Vec<String> {
         Err(e) => problems.push(format!("samples.csv: {e}")),
     }
     match std::fs::read_to_string(dir.join("report.json")) {
-        Ok(text) => match serde_json::from_str::<serde_json::Value>(&text) {
-            Ok(v) => {
-                let mut nulls = Vec::new();
-                unexpected_nulls(&v, "", &mut nulls);
-                problems.extend(
-                    nulls
-                        .into_iter()
-                        .map(|p| format!("report.json: {p} is null (NaN or infinity)")),
-                );
-            }
-            Err(e) => problems.push(format!("report.json is not JSON: {e}")),
-        },
+        Ok(text) => problems.extend(report_problem(&text)),
         Err(e) => problems.push(format!("report.json: {e}")),
     }
     problems
 }
 
-/// Collects the paths of `null`s in a report that are not an absent optional value:
-/// serde writes a NaN or an infinity as `null`, and the report's only optional values are
-/// the milestones, `geo_hop_fraction`, `ledger.bang_time_s`, the limits' `t_s`, the rivals'
-/// times and stall fractions, `bang` (a run stopped before the bang) and `bang.ended_by` (a
-/// bang cut short).
-fn unexpected_nulls(v: &serde_json::Value, path: &str, out: &mut Vec<String>) {
-    match v {
-        serde_json::Value::Null => {
-            let optional = path.starts_with("milestones")
-                || path == "geo_hop_fraction"
-                || path == "ledger.bang_time_s"
-                || path == "bang"
-                || path == "bang.ended_by"
-                || (path.starts_with("reference_limits") && path.ends_with(".t_s"))
-                || (path.starts_with("rivals")
-                    && (path.contains(".t_s[") || path.ends_with(".stall_fraction")));
-            if !optional {
-                out.push(path.to_owned());
-            }
-        }
-        serde_json::Value::Array(a) => {
-            for (i, x) in a.iter().enumerate() {
-                unexpected_nulls(x, &format!("{path}[{i}]"), out);
-            }
-        }
-        serde_json::Value::Object(m) => {
-            for (k, x) in m {
-                let p = if path.is_empty() {
-                    k.clone()
-                } else {
-                    format!("{path}.{k}")
-                };
-                unexpected_nulls(x, &p, out);
-            }
-        }
-        _ => {}
-    }
+/// Why `report.json`'s text does not read back as a [`RunReport`], naming the field: serde
+/// writes a NaN or an infinity as `null`, which only an optional value may be.
+fn report_problem(text: &str) -> Option<String> {
+    let mut de = serde_json::Deserializer::from_str(text);
+    serde_path_to_error::deserialize::<_, RunReport>(&mut de)
+        .err()
+        .map(|e| {
+            format!(
+                "report.json: {} does not read back: {}",
+                e.path(),
+                e.inner()
+            )
+        })
 }
 
 /// Problems of a `samples.csv` text: header, cell count, non-finite cells.
@@ -253,9 +219,7 @@ fn bang_table(o: &mut String, cases: &[Case]) {
         return;
     }
     let _ = writeln!(o);
-    let _ = writeln!(
-        o,
-        "{:<20} {:>9} {:>6} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>12}",
+    let mut table = Table::new([
         "final bang",
         "moving %",
         "ended",
@@ -265,8 +229,8 @@ fn bang_table(o: &mut String, cases: &[Case]) {
         "freeze",
         "resid.",
         "numer.",
-        "bang/unroll"
-    );
+        "bang/unroll",
+    ]);
     for (c, r, b) in rows {
         let d = r.ledger.dissipated_by_bang_j;
         let split = r.ledger.bang_split_meaningful();
@@ -284,21 +248,20 @@ fn bang_table(o: &mut String, cases: &[Case]) {
             None => "cut",
         };
         let unroll = r.wall_time_rolling_s;
-        let _ = writeln!(
-            o,
-            "{:<20} {:>9.3} {:>6} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>12.2}",
-            c.name,
-            100.0 * b.still_moving_j / b.kinetic_in_j,
-            ended,
+        table.push([
+            c.name.clone(),
+            format!("{:.3}", 100.0 * b.still_moving_j / b.kinetic_in_j),
+            ended.to_owned(),
             pc(l.floor_normal_j),
             pc(l.floor_friction_j),
             pc(l.joints_j),
             pc(l.freeze_j),
             pc(l.residual_j),
             pc(l.numerical_j()),
-            (r.wall_time_s - unroll) / unroll
-        );
+            format!("{:.2}", (r.wall_time_s - unroll) / unroll),
+        ]);
     }
+    o.push_str(&table.text(""));
     let _ = writeln!(
         o,
         "moving %: kinetic energy still moving at the end, percent of what the bang received; \
@@ -313,11 +276,16 @@ fn bang_table(o: &mut String, cases: &[Case]) {
 /// applying, then any output problem.
 pub fn table(cases: &[Case]) -> String {
     let mut o = String::new();
-    let _ = writeln!(
-        o,
-        "{:<20} {:<10} {:>10} {:>10} {:>10} {:>9} {:>10}  references stop applying",
-        "case", "outcome", "joint m", "penetr. m", "E drift", "wall s", "spin rad/s"
-    );
+    let mut table = Table::new([
+        "case",
+        "outcome",
+        "joint m",
+        "penetr. m",
+        "E drift",
+        "wall s",
+        "spin rad/s",
+        "references stop applying",
+    ]);
     for c in cases {
         let (gap, pen, drift, wall, spin, limits) = match &c.report {
             Some(r) => (
@@ -338,19 +306,18 @@ pub fn table(cases: &[Case]) -> String {
             None => Default::default(),
         };
         let dash = |s: String| if s.is_empty() { "-".to_owned() } else { s };
-        let _ = writeln!(
-            o,
-            "{:<20} {:<10} {:>10} {:>10} {:>10} {:>9} {:>10}  {}",
-            c.name,
-            c.outcome.word(),
+        table.push([
+            c.name.clone(),
+            c.outcome.word().to_owned(),
             dash(gap),
             dash(pen),
             dash(drift),
             dash(wall),
             dash(spin),
-            dash(limits)
-        );
+            dash(limits),
+        ]);
     }
+    o.push_str(&table.text(""));
     let _ = writeln!(o);
     let _ = writeln!(
         o,
@@ -412,17 +379,22 @@ mod tests {
     }
 
     #[test]
-    fn only_optional_values_may_be_null() {
-        let v = serde_json::json!({
-            "geo_hop_fraction": null,
-            "milestones": [{"t_sim_s": null}],
-            "reference_limits": [{"t_s": null, "r_m": 1.0}],
-            "ledger": {"bang_time_s": null, "e0_j": null},
-            "max_joint_gap_m": null,
-        });
-        let mut nulls = Vec::new();
-        unexpected_nulls(&v, "", &mut nulls);
-        nulls.sort();
-        assert_eq!(nulls, vec!["ledger.e0_j", "max_joint_gap_m"]);
+    fn a_report_reads_back_unless_a_number_is_null() {
+        let mut scene = crate::scene::Scene::from_toml_str(
+            "[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\nmass_kg = 1.5\n\
+             [push]\ncontact_speed_m_s = 0.3\n[stop]\nmax_time_s = 0.05\n",
+            "short",
+        )
+        .unwrap();
+        scene.output.scene_rate_hz = 0.0;
+        let report = run(&scene, &mut []).unwrap();
+        let mut v = serde_json::to_value(&report).unwrap();
+        assert_eq!(report_problem(&v.to_string()), None);
+        // An optional value may be null; a number may not (a NaN written out).
+        v["geo_hop_fraction"] = serde_json::Value::Null;
+        assert_eq!(report_problem(&v.to_string()), None);
+        v["ledger"]["e0_j"] = serde_json::Value::Null;
+        let p = report_problem(&v.to_string()).expect("a null number is a problem");
+        assert!(p.contains("ledger.e0_j"), "{p}");
     }
 }

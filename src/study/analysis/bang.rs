@@ -1,0 +1,171 @@
+//! The final bang's studies: per varied key and setting of the others, each setting an
+//! ensemble of repetitions, each observable its mean, the standard error of that mean and
+//! the fitted order of its change from the finest setting. Numbers only: their Markdown
+//! table is in [`report`](super::report).
+
+use std::collections::BTreeMap;
+
+use super::{PowerFit, fit_power, fitting_rows, step_size};
+use crate::study::sweep::SweepTable;
+
+/// The final bang's observables a bang study follows: a label and how to read it from a
+/// sweep row (`None` where the run has no bang).
+pub const BANG_OBSERVABLES: [(&str, &str); 10] = [
+    ("dissipated / kinetic in", "dissipated"),
+    ("floor normal share", "bang_floor_normal_of"),
+    ("floor friction share", "bang_floor_friction_of"),
+    ("numerical share", "bang_numerical_of"),
+    ("top speed (m/s)", "bang_top_speed_m_s"),
+    ("duration (s)", "bang_duration_s"),
+    ("peak floor force (N)", "bang_peak_floor_force_n"),
+    ("floor impulse (N s)", "bang_floor_impulse_n_s"),
+    ("end short of flat (m)", "short"),
+    ("bang wall / unroll wall", "cost"),
+];
+
+/// The final bang in one varied key, the others held: a chaotic process, so each
+/// setting is an ensemble (the repetitions, e.g. pushes differing in the fourth digit) and
+/// each observable its mean with the standard error of that mean.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BangStudy {
+    /// The varied key.
+    pub key: String,
+    /// The other keys' settings, `k=v k=v`.
+    pub group: String,
+    /// The key's settings, coarsest first.
+    pub values: Vec<f64>,
+    /// Step sizes ([`step_size`]) of the settings.
+    pub h: Vec<f64>,
+    /// Runs (with a bang) per setting.
+    pub n: Vec<usize>,
+    /// Per observable of [`BANG_OBSERVABLES`]: mean per setting.
+    pub mean: Vec<Vec<f64>>,
+    /// Per observable: standard error of the mean per setting (`NaN` with one run).
+    pub se: Vec<Vec<f64>>,
+    /// Per observable: fit of |mean - the finest setting's mean| against h (the finest
+    /// setting excluded); for the numerical share, whose limit is zero, of the mean itself.
+    pub fit: Vec<Option<PowerFit>>,
+}
+
+/// The bang studies of a sweep with bang columns: one per numeric varied key and setting
+/// of the other keys, the `repeats` pooled as the ensemble, over the runs whose bang took
+/// time. Empty if the sweep has no bang columns or no key takes two settings.
+pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
+    let col = |name: &str| table.numbers(name);
+    let (Some(kin), Some(diss), Some(laid), Some(end), Some(bw), Some(rw), Some(duration)) = (
+        col("bang_kinetic_in_j"),
+        col("bang_dissipated_j"),
+        col("bang_laid_length_m"),
+        col("bang_end_x_m"),
+        col("bang_wall_s"),
+        col("wall_rolling_s"),
+        col("bang_duration_s"),
+    ) else {
+        return Vec::new();
+    };
+    let rows = table.rows.len();
+    let fits = fitting_rows(table).unwrap_or_else(|| vec![true; rows]);
+    let values: Vec<Vec<f64>> = BANG_OBSERVABLES
+        .iter()
+        .map(|(_, c)| match *c {
+            "dissipated" => (0..rows).map(|r| diss[r] / kin[r]).collect(),
+            "short" => (0..rows).map(|r| laid[r] - end[r]).collect(),
+            "cost" => (0..rows).map(|r| bw[r] / rw[r]).collect(),
+            c => col(c).unwrap_or_else(|| vec![f64::NAN; rows]),
+        })
+        .collect();
+    let keys = table.varied_keys();
+    let cell = |r: usize, k: &str| table.rows[r][table.column(k).expect("a varied key")].clone();
+    let mut studies = Vec::new();
+    for key in keys.iter().filter(|k| !repeats.contains(k)) {
+        let Some(vals) = table
+            .numbers(key)
+            .filter(|v| v.iter().all(|x| x.is_finite()))
+        else {
+            continue;
+        };
+        // Group the runs with a bang by the other (non-repeat) keys, then by this key.
+        let mut groups: BTreeMap<String, BTreeMap<u64, Vec<usize>>> = BTreeMap::new();
+        // A bang given no time (stop.bang_cap_s = 0) has nothing to say.
+        for r in (0..rows).filter(|&r| fits[r] && kin[r].is_finite() && duration[r] > 0.0) {
+            let g = keys
+                .iter()
+                .filter(|k| *k != key && !repeats.contains(k))
+                .map(|k| format!("{k}={}", cell(r, k)))
+                .collect::<Vec<_>>()
+                .join(" ");
+            groups
+                .entry(g)
+                .or_default()
+                .entry(vals[r].to_bits())
+                .or_default()
+                .push(r);
+        }
+        for (group, by_value) in groups {
+            if by_value.len() < 2 {
+                continue;
+            }
+            studies.push(ensemble_study(key, group, by_value, &values));
+        }
+    }
+    studies
+}
+
+/// The bang study of `key` in one group: `by_value` holds the rows of each setting (by the
+/// bits of its value, two settings or more), `values` each observable's value per row.
+fn ensemble_study(
+    key: &str,
+    group: String,
+    by_value: BTreeMap<u64, Vec<usize>>,
+    values: &[Vec<f64>],
+) -> BangStudy {
+    let mut settings: Vec<(f64, Vec<usize>)> = by_value
+        .into_iter()
+        .map(|(bits, rs)| (f64::from_bits(bits), rs))
+        .collect();
+    settings.sort_by(|a, b| step_size(key, b.0).total_cmp(&step_size(key, a.0)));
+    let h: Vec<f64> = settings.iter().map(|(v, _)| step_size(key, *v)).collect();
+    let (mut mean, mut se, mut fit) = (Vec::new(), Vec::new(), Vec::new());
+    for (v, (_, column)) in values.iter().zip(BANG_OBSERVABLES) {
+        let stats: Vec<(f64, f64)> = settings
+            .iter()
+            .map(|(_, rs)| mean_and_se(rs.iter().map(|&r| v[r])))
+            .collect();
+        let m: Vec<f64> = stats.iter().map(|s| s.0).collect();
+        if column == "bang_numerical_of" {
+            fit.push(fit_power(&h, &m));
+        } else {
+            let finest = *m.last().expect("two settings");
+            let change: Vec<f64> = m[..m.len() - 1]
+                .iter()
+                .map(|x| (x - finest).abs())
+                .collect();
+            fit.push(fit_power(&h[..h.len() - 1], &change));
+        }
+        se.push(stats.iter().map(|s| s.1).collect());
+        mean.push(m);
+    }
+    BangStudy {
+        key: key.to_owned(),
+        group,
+        values: settings.iter().map(|s| s.0).collect(),
+        n: settings.iter().map(|s| s.1.len()).collect(),
+        h,
+        mean,
+        se,
+        fit,
+    }
+}
+
+/// Mean and standard error of the mean of the finite values (`NaN`s if none; the error is
+/// `NaN` with one).
+fn mean_and_se(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let v: Vec<f64> = values.filter(|x| x.is_finite()).collect();
+    let n = v.len() as f64;
+    if v.is_empty() {
+        return (f64::NAN, f64::NAN);
+    }
+    let m = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
+    (m, (var / n).sqrt())
+}

@@ -1,0 +1,561 @@
+//! A run's pictures, read back from its `samples.csv` and `report.json`: its motion, its
+//! energy ledger with the bang by mechanism, its approach to the bang and its forces, each
+//! against the references. It reads the run's files and runs nothing.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+use plotters::prelude::*;
+
+use super::{
+    Area, Curve, EQ7, EXACT, FONT, LinChart, LogChart, SIM, color, err, legend, line_chart,
+    log_chart, log_range, pairs, positive_pairs, range,
+};
+use crate::run::RunReport;
+use crate::run::limits::LimitKind;
+use crate::study::sweep::SweepTable;
+
+/// The simulation, the exact-geometry model and eq. (7) as three curves over `t`, from the
+/// columns `[sim, exact, eq7]`.
+fn against_references<'a>(t: &[f64], columns: &[Vec<f64>; 3]) -> [Curve<'a>; 3] {
+    let curve = |label, i: usize, color, dashed| Curve {
+        label,
+        points: pairs(t, &columns[i]),
+        color,
+        dashed,
+    };
+    [
+        curve("simulation", 0, SIM, false),
+        curve("exact-geometry model", 1, EXACT, true),
+        curve("eq. (7)", 2, EQ7, true),
+    ]
+}
+
+/// Draws, from the run's `samples.csv` and `report.json`: `dir/motion.svg` (r and x'
+/// against time, with the exact-geometry model and eq. (7), up to the final bang),
+/// `dir/energy.svg` (kinetic, potential and lost energy over the whole run, with MgR, E0
+/// and the drop at the bang; below, the bang alone, with what it dissipated split by
+/// mechanism) and `dir/approach.svg` (x' against r, log-log, over the unroll, with the
+/// references, eq. (7)'s x' ~ 1/r, and where the references stop applying) and
+/// `dir/forces.svg` (`N_tot`, and `F_tot` with its split into `F` and `F_int`, against the
+/// laid fraction up to 0.95, with the exact-geometry model's). Returns the files written.
+pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    let run = RunFiles::read(dir)?;
+    let motion = dir.join("motion.svg");
+    motion_plot(&motion, &run)?;
+    let energy = dir.join("energy.svg");
+    energy_plot(&energy, &run)?;
+    let approach = dir.join("approach.svg");
+    approach_plot(&approach, &run)?;
+    let forces = dir.join("forces.svg");
+    forces_plot(&forces, &|c| run.cut(c), &run.name)?;
+    Ok(vec![motion, energy, approach, forces])
+}
+
+/// A run's files read back: its samples, its report and what the pictures take from it.
+struct RunFiles {
+    samples: SweepTable,
+    report: RunReport,
+    /// MgR (J).
+    mgr: f64,
+    /// The initial energy (J).
+    e0: f64,
+    /// What the final bang dissipated (J).
+    bang_j: f64,
+    /// When the final bang began, if it did.
+    bang_t: Option<f64>,
+    /// The scene's name.
+    name: String,
+    /// The samples' times (s).
+    t: Vec<f64>,
+    /// The samples of the unroll: those up to the final bang.
+    upto: usize,
+}
+
+impl RunFiles {
+    /// Reads `dir/samples.csv` and `dir/report.json`.
+    fn read(dir: &Path) -> anyhow::Result<Self> {
+        let samples = SweepTable::read(&dir.join("samples.csv"))?;
+        let report_path = dir.join("report.json");
+        let text = std::fs::read_to_string(&report_path)
+            .with_context(|| format!("cannot read {}", report_path.display()))?;
+        let mut de = serde_json::Deserializer::from_str(&text);
+        let report: RunReport = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+            anyhow::anyhow!(
+                "{}: {} does not read back as a report of this version: {}",
+                report_path.display(),
+                e.path(),
+                e.inner()
+            )
+        })?;
+        let ledger = &report.ledger;
+        let (mgr, e0, bang_j) = (ledger.mgr_j, ledger.e0_j, ledger.dissipated_by_bang_j);
+        let bang_t = ledger.bang_time_s;
+        let name = report.scene.name.clone();
+        let t = column(&samples, "t_s")?;
+        let upto = t
+            .iter()
+            .position(|&ti| bang_t.is_some_and(|b| ti > b))
+            .unwrap_or(t.len());
+        Ok(Self {
+            samples,
+            report,
+            mgr,
+            e0,
+            bang_j,
+            bang_t,
+            name,
+            t,
+            upto,
+        })
+    }
+
+    /// Column `c` of the samples.
+    fn col(&self, c: &str) -> anyhow::Result<Vec<f64>> {
+        column(&self.samples, c)
+    }
+
+    /// Column `c` of the samples of the unroll.
+    fn cut(&self, c: &str) -> anyhow::Result<Vec<f64>> {
+        self.col(c).map(|v| v[..self.upto].to_vec())
+    }
+}
+
+/// Column `c` of `samples.csv`.
+fn column(samples: &SweepTable, c: &str) -> anyhow::Result<Vec<f64>> {
+    samples
+        .numbers(c)
+        .with_context(|| format!("samples.csv has no `{c}` column"))
+}
+
+/// `path`: r and x' against time, with the exact-geometry model and eq. (7), up to the
+/// final bang.
+fn motion_plot(path: &Path, run: &RunFiles) -> anyhow::Result<()> {
+    let name = &run.name;
+    let tr = &run.t[..run.upto];
+    let root = SVGBackend::new(path, (900, 800)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let panels = root.split_evenly((2, 1));
+    let r = [run.cut("r_m")?, run.cut("r_geo_m")?, run.cut("r_ref_m")?];
+    line_chart(
+        &panels[0],
+        &format!("{name}: equivalent coil radius r = R sqrt(1 - laid fraction)"),
+        "t (s)",
+        "r (m)",
+        &against_references(tr, &r),
+        SeriesLabelPosition::UpperLeft,
+        |_| Ok(()),
+    )?;
+    let v = [
+        run.cut("xdot_m_s")?,
+        run.cut("xdot_geo_m_s")?,
+        run.cut("xdot_ref_m_s")?,
+    ];
+    line_chart(
+        &panels[1],
+        &format!("{name}: contact-line speed x', up to the final bang"),
+        "t (s)",
+        "x' (m/s)",
+        &against_references(tr, &v),
+        SeriesLabelPosition::UpperLeft,
+        |_| Ok(()),
+    )?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
+/// `path`: kinetic, potential and lost energy over the whole run, with MgR, E0 and the
+/// start of the final bang; below, if there was one, the bang alone ([`bang_panel`]).
+fn energy_plot(path: &Path, run: &RunFiles) -> anyhow::Result<()> {
+    let (name, t, bang_t) = (&run.name, &run.t, run.bang_t);
+    let height = if bang_t.is_some() { 950 } else { 500 };
+    let root = SVGBackend::new(path, (900, height)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let (whole, zoom) = if bang_t.is_some() {
+        let (a, b) = root.split_vertically(500);
+        (a, Some(b))
+    } else {
+        (root.clone(), None)
+    };
+    let k = run.col("kinetic_j")?;
+    let p = run.col("potential_j")?;
+    let d = run.col("dissipated_j")?;
+    let caption = match bang_t {
+        Some(b) => format!(
+            "{name}: energy ledger; the final bang at t = {b:.3} s dissipates {:.3} J = {:.2} MgR",
+            run.bang_j,
+            run.bang_j / run.mgr
+        ),
+        None => format!("{name}: energy ledger (no final bang reached)"),
+    };
+    line_chart(
+        &whole,
+        &caption,
+        "t (s)",
+        "energy (J)",
+        &ledger_curves(run, t, &k, &p, &d),
+        SeriesLabelPosition::MiddleLeft,
+        |chart| match bang_t {
+            Some(b) => {
+                let y = range(
+                    k.iter()
+                        .chain(&p)
+                        .chain(&d)
+                        .copied()
+                        .chain([run.e0, run.mgr]),
+                );
+                mark_bang_start(chart, b, y)
+            }
+            None => Ok(()),
+        },
+    )?;
+    if let (Some(area), Some(b)) = (zoom, bang_t) {
+        bang_panel(&area, &run.samples, b, name)?;
+    }
+    root.present().map_err(err)?;
+    Ok(())
+}
+
+/// The energy ledger's curves over `t`: kinetic `k`, potential `p`, lost so far `d`, and
+/// the levels MgR and E0.
+fn ledger_curves<'a>(run: &RunFiles, t: &[f64], k: &[f64], p: &[f64], d: &[f64]) -> [Curve<'a>; 5] {
+    let (t0, t1) = (
+        t.first().copied().unwrap_or(0.0),
+        t.last().copied().unwrap_or(1.0),
+    );
+    [
+        Curve {
+            label: "kinetic",
+            points: pairs(t, k),
+            color: EXACT,
+            dashed: false,
+        },
+        Curve {
+            label: "potential (above the floor)",
+            points: pairs(t, p),
+            color: RGBColor(44, 160, 44),
+            dashed: false,
+        },
+        Curve {
+            label: "lost so far",
+            points: pairs(t, d),
+            color: EQ7,
+            dashed: false,
+        },
+        Curve {
+            label: "MgR",
+            points: vec![(t0, run.mgr), (t1, run.mgr)],
+            color: RGBColor(127, 127, 127),
+            dashed: true,
+        },
+        Curve {
+            label: "E0",
+            points: vec![(t0, run.e0), (t1, run.e0)],
+            color: SIM,
+            dashed: true,
+        },
+    ]
+}
+
+/// A dashed vertical line at `b`, the start of the final bang, over `(y0, y1)`.
+fn mark_bang_start(
+    chart: &mut LinChart<'_, '_>,
+    b: f64,
+    (y0, y1): (f64, f64),
+) -> anyhow::Result<()> {
+    let c = RGBColor(148, 103, 189);
+    chart
+        .draw_series(DashedLineSeries::new(
+            [(b, y0), (b, y1)],
+            4,
+            4,
+            c.stroke_width(1),
+        ))
+        .map_err(err)?
+        .label("final bang begins")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1)));
+    Ok(())
+}
+
+/// `path`: `N_tot` above, `F_tot` with its split into `F` and `F_int` below, against the
+/// laid fraction up to 0.95 (the forces grow without bound as the coil runs out), the
+/// simulation's beside the exact model's; `cut` reads a column of the unroll.
+fn forces_plot(
+    path: &Path,
+    cut: &dyn Fn(&str) -> anyhow::Result<Vec<f64>>,
+    name: &str,
+) -> anyhow::Result<()> {
+    type Spec = (&'static str, &'static str, RGBColor, bool);
+    let panels: [(String, &str, Vec<Spec>, SeriesLabelPosition); 2] = [
+        (
+            format!("{name}: upward force on the moving part, N_tot (link-period means)"),
+            "N_tot (N)",
+            vec![
+                ("simulation", "n_tot_n", SIM, false),
+                ("exact-geometry model", "n_tot_geo_n", EXACT, true),
+                ("paper (eq. 9, A4)", "n_tot_ref_n", EQ7, true),
+            ],
+            SeriesLabelPosition::UpperRight,
+        ),
+        (
+            format!("{name}: F_tot = F (floor) + F_int (laid tape), +x positive"),
+            "force (N)",
+            vec![
+                ("F_tot simulation", "f_tot_n", SIM, false),
+                ("F_tot exact", "f_tot_geo_n", SIM, true),
+                ("F simulation", "f_floor_n", EXACT, false),
+                ("F exact (least pull)", "f_floor_geo_n", EXACT, true),
+                ("F_int simulation", "f_int_n", EQ7, false),
+                ("F_int exact (least pull)", "f_int_geo_n", EQ7, true),
+            ],
+            SeriesLabelPosition::LowerLeft,
+        ),
+    ];
+    let root = SVGBackend::new(path, (900, 800)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let areas = root.split_evenly((2, 1));
+    let f = cut("laid_fraction")?;
+    for (area, (caption, y_desc, specs, legend_at)) in areas.iter().zip(panels) {
+        let mut curves = Vec::new();
+        for (label, column, color, dashed) in specs {
+            let mut points = pairs(&f, &cut(column)?);
+            points.retain(|p| p.0 <= 0.95);
+            curves.push(Curve {
+                label,
+                points,
+                color,
+                dashed,
+            });
+        }
+        line_chart(
+            area,
+            &caption,
+            "laid fraction f",
+            y_desc,
+            &curves,
+            legend_at,
+            |_| Ok(()),
+        )?;
+    }
+    root.present().map_err(err)?;
+    Ok(())
+}
+
+/// The bang alone, from its release `bang_t` on, on a log time axis (its impacts take a
+/// millisecond, its settling a tenth of a second): the kinetic energy and, cumulatively,
+/// what it dissipated by mechanism (`samples.csv`'s `bang_*` columns).
+fn bang_panel(
+    area: &Area<'_>,
+    samples: &SweepTable,
+    bang_t: f64,
+    name: &str,
+) -> anyhow::Result<()> {
+    let col = |c: &str| {
+        samples
+            .numbers(c)
+            .with_context(|| format!("samples.csv has no `{c}` column"))
+    };
+    let t = col("t_s")?;
+    let from = t.iter().position(|&ti| ti > bang_t).unwrap_or(t.len());
+    let since: Vec<f64> = t[from..].iter().map(|ti| ti - bang_t).collect();
+    let part = |c: &str| col(c).map(|v| pairs(&since, &v[from..]));
+    let curves = [
+        ("kinetic", part("kinetic_j")?, SIM, false),
+        (
+            "floor: normal impacts",
+            part("bang_floor_normal_j")?,
+            EXACT,
+            false,
+        ),
+        (
+            "floor: friction",
+            part("bang_floor_friction_j")?,
+            RGBColor(44, 160, 44),
+            false,
+        ),
+        ("joints (numerical)", part("bang_joints_j")?, EQ7, true),
+        (
+            "residual (numerical)",
+            part("bang_residual_j")?,
+            RGBColor(148, 103, 189),
+            true,
+        ),
+        (
+            "freezing",
+            part("bang_freeze_j")?,
+            RGBColor(127, 127, 127),
+            true,
+        ),
+    ];
+    let (x0, x1) = log_range(since.iter().copied());
+    let (y0, y1) = range(curves.iter().flat_map(|c| c.1.iter().map(|p| p.1)));
+    let mut chart = ChartBuilder::on(area)
+        .caption(
+            format!("{name}: the final bang, from its release; dissipated so far, by mechanism"),
+            (FONT, 18),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("time since the release (s), log scale")
+        .y_desc("energy (J)")
+        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .light_line_style(WHITE.mix(0.0))
+        .draw()
+        .map_err(err)?;
+    for (label, points, color, dashed) in curves {
+        let style = color.stroke_width(2);
+        if dashed {
+            chart
+                .draw_series(DashedLineSeries::new(points, 8, 5, style))
+                .map_err(err)?
+        } else {
+            chart
+                .draw_series(LineSeries::new(points, style))
+                .map_err(err)?
+        }
+        .label(label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::MiddleLeft)
+        .label_font((FONT, 14))
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}
+
+/// `approach.svg`: the contact-line speed against the equivalent radius over the unroll
+/// (the samples up to the final bang), log-log, with the exact-geometry model, eq. (7) and its
+/// x' ~ 1/r, and a mark where each reference stops applying and at the release.
+fn approach_plot(path: &Path, run: &RunFiles) -> anyhow::Result<()> {
+    let sim = positive_pairs(&run.cut("r_m")?, &run.cut("xdot_m_s")?);
+    let exact = reference_curve(&run.report.approach.exact_curve);
+    let eq7 = reference_curve(&run.report.approach.eq7_curve);
+    let t = run.cut("t_s")?;
+    let r = run.cut("r_m")?;
+    let root = SVGBackend::new(path, (900, 650)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let all = sim.iter().chain(&exact).chain(&eq7);
+    let mut chart = log_chart(
+        &root,
+        &format!(
+            "{}: contact-line speed against the equivalent radius r = R sqrt(1 - f)",
+            run.name
+        ),
+        "r (m)",
+        "x' (m/s)",
+        all.clone().map(|p| p.0),
+        all.map(|p| p.1),
+    )?;
+    let series = [
+        ("simulation", &sim, SIM, false),
+        ("exact-geometry model", &exact, EXACT, true),
+        ("eq. (7)", &eq7, EQ7, true),
+    ];
+    for (label, pts, c, dashed) in series {
+        let style = c.stroke_width(2);
+        if dashed {
+            chart
+                .draw_series(DashedLineSeries::new(pts.iter().copied(), 8, 5, style))
+                .map_err(err)?
+        } else {
+            chart
+                .draw_series(LineSeries::new(pts.iter().copied(), style))
+                .map_err(err)?
+        }
+        .label(label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+    }
+    one_over_r(&mut chart, &eq7)?;
+    let marks = approach_marks(&run.report, &t, &r);
+    draw_marks(&mut chart, marks, &sim)?;
+    legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
+/// A reference's own x'(r), down to the bang radius (the report's `approach` curves), where
+/// both are positive.
+fn reference_curve(curve: &[[f64; 2]]) -> Vec<(f64, f64)> {
+    curve
+        .iter()
+        .map(|p| (p[0], p[1]))
+        .filter(|(a, b)| *a > 0.0 && *b > 0.0)
+        .collect()
+}
+
+/// Eq. (7)'s divergence, x' ~ 1/r, through its curve's point at the smallest r.
+fn one_over_r(chart: &mut LogChart<'_, '_>, eq7: &[(f64, f64)]) -> anyhow::Result<()> {
+    if let (Some(&(r0, v0)), Some(&(r1, _))) = (
+        eq7.iter().min_by(|a, b| a.0.total_cmp(&b.0)),
+        eq7.iter().max_by(|a, b| a.0.total_cmp(&b.0)),
+    ) {
+        let c = RGBColor(127, 127, 127);
+        chart
+            .draw_series(DashedLineSeries::new(
+                [(r0, v0), (r1, v0 * r0 / r1)],
+                3,
+                3,
+                c.stroke_width(1),
+            ))
+            .map_err(err)?
+            .label("x' ~ 1/r (eq. 7 as r -> 0)")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1)));
+    }
+    Ok(())
+}
+
+/// Where each reference stops applying, and the release, each at the simulation's
+/// equivalent radius at that time (`t` and `r`: the samples of the unroll).
+fn approach_marks(report: &RunReport, t: &[f64], r: &[f64]) -> Vec<(String, f64)> {
+    let r_at = |time: f64| {
+        t.iter()
+            .position(|&ti| ti >= time)
+            .and_then(|i| r.get(i).copied())
+    };
+    let mut marks: Vec<(String, f64)> = report
+        .reference_limits
+        .iter()
+        .filter(|l| l.kind != LimitKind::FewTurns)
+        .filter_map(|l| {
+            let kind = serde_json::to_value(l.kind).ok()?;
+            Some((kind.as_str()?.replace('-', " "), r_at(l.t_s?)?))
+        })
+        .collect();
+    if report.bang.is_some() {
+        marks.push(("the release (last link)".into(), report.approach.peak_r_m));
+    }
+    marks
+}
+
+/// The `marks` as vertical lines spanning the simulation's x' (`sim`).
+fn draw_marks(
+    chart: &mut LogChart<'_, '_>,
+    marks: Vec<(String, f64)>,
+    sim: &[(f64, f64)],
+) -> anyhow::Result<()> {
+    let (y0, y1) = (
+        sim.iter().map(|p| p.1).fold(f64::INFINITY, f64::min),
+        sim.iter().map(|p| p.1).fold(0.0_f64, f64::max),
+    );
+    for (i, (label, at)) in marks.into_iter().enumerate() {
+        if !(at > 0.0 && y0.is_finite() && y1 > 0.0) {
+            continue;
+        }
+        let c = color(i + 3);
+        chart
+            .draw_series(LineSeries::new([(at, y0), (at, y1)], c.stroke_width(1)))
+            .map_err(err)?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1)));
+    }
+    Ok(())
+}

@@ -1,0 +1,385 @@
+//! A sweep's pictures from its [`SweepAnalysis`]: the Pareto plot, one convergence plot
+//! per varied key and one picture per bang study. It draws what the analysis worked out
+//! and computes nothing new.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+use plotters::prelude::*;
+
+use super::{
+    Area, EXACT, FONT, LogChart, SIM, color, err, legend, log_chart, log_range, pairs,
+    positive_pairs, range,
+};
+use crate::study::analysis::{BANG_OBSERVABLES, BangStudy, PowerFit, Study, SweepAnalysis};
+
+/// `p ± se` of a fit.
+fn order(f: &PowerFit) -> String {
+    if f.order_se.is_finite() {
+        format!("{:.2} ± {:.2}", f.order, f.order_se)
+    } else {
+        format!("{:.2}", f.order)
+    }
+}
+
+/// Draws a fitted power law over `[h0, h1]` and names its order in the legend.
+fn fit_line<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>,
+    fit: &PowerFit,
+    h: &[f64],
+    label: String,
+    c: RGBColor,
+) -> anyhow::Result<()> {
+    let (lo, hi) = h
+        .iter()
+        .filter(|v| v.is_finite() && **v > 0.0)
+        .fold((f64::INFINITY, 0.0_f64), |(a, b), &v| (a.min(v), b.max(v)));
+    if !lo.is_finite() {
+        return Ok(());
+    }
+    chart
+        .draw_series(DashedLineSeries::new(
+            [(lo, fit.eval(lo)), (hi, fit.eval(hi))],
+            6,
+            4,
+            c.stroke_width(1),
+        ))
+        .map_err(|e| anyhow::anyhow!("cannot draw: {e}"))?
+        .label(label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1)));
+    Ok(())
+}
+
+/// Draws a sweep's pictures into `dir`: `pareto.svg` (error against cost, log-log, one
+/// series per contact model / solver setting, the front joined) and, per varied numeric
+/// key, `convergence-<key>.svg` (error and energy lost before the bang against the step
+/// size with the fitted orders, and the wall time per step against links). Returns the
+/// files written.
+pub fn plot_sweep(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create output folder {}", dir.display()))?;
+    let mut written = Vec::new();
+    let pareto = dir.join("pareto.svg");
+    pareto_plot(&pareto, a, title)?;
+    written.push(pareto);
+    let mut keys: Vec<&String> = a.studies.iter().map(|s| &s.key).collect();
+    keys.dedup();
+    for key in keys {
+        let path = dir.join(format!("convergence-{key}.svg"));
+        convergence_plot(&path, a, key, title)?;
+        written.push(path.clone());
+    }
+    written.extend(bang_plots(a, dir, title)?);
+    Ok(written)
+}
+
+/// `path`: error against cost, log-log, one series per contact model / solver setting,
+/// the front joined, and the target's box if there is one.
+fn pareto_plot(path: &Path, a: &SweepAnalysis, title: &str) -> anyhow::Result<()> {
+    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let idx: Vec<usize> = (0..a.cost.len())
+        .filter(|&i| a.cost[i].is_finite() && a.err[i].is_finite() && a.err[i] > 0.0)
+        .collect();
+    let mut chart = log_chart(
+        &root,
+        &format!("{title}: error against wall time"),
+        &format!("wall time, {} (s)", a.cost_column),
+        &format!("max |time error| vs {}", a.reference.label()),
+        idx.iter().map(|&i| a.cost[i]).chain(a.target.map(|t| t.1)),
+        idx.iter().map(|&i| a.err[i]).chain(a.target.map(|t| t.0)),
+    )?;
+    let mut names: Vec<&String> = idx.iter().map(|&i| &a.series[i]).collect();
+    names.sort();
+    names.dedup();
+    for (si, name) in names.iter().enumerate() {
+        let c = color(si);
+        let pts: Vec<(f64, f64)> = idx
+            .iter()
+            .filter(|&&i| &&a.series[i] == name)
+            .map(|&i| (a.cost[i], a.err[i]))
+            .collect();
+        let label = if name.is_empty() {
+            "runs".to_owned()
+        } else {
+            (*name).clone()
+        };
+        chart
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))
+            .map_err(err)?
+            .label(label)
+            .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
+    }
+    let front: Vec<(f64, f64)> = a
+        .front
+        .iter()
+        .filter(|&&i| a.err[i] > 0.0)
+        .map(|&i| (a.cost[i], a.err[i]))
+        .collect();
+    chart
+        .draw_series(LineSeries::new(front, BLACK.stroke_width(1)))
+        .map_err(err)?
+        .label("Pareto front")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+    if let Some((e, c)) = a.target {
+        let (x0, _) = log_range(idx.iter().map(|&i| a.cost[i]).chain([c]));
+        let (y0, _) = log_range(idx.iter().map(|&i| a.err[i]).chain([e]));
+        let grey = RGBColor(127, 127, 127);
+        chart
+            .draw_series(DashedLineSeries::new(
+                [(x0, e), (c, e), (c, y0)],
+                6,
+                4,
+                grey.stroke_width(2),
+            ))
+            .map_err(err)?
+            .label(format!("target: <= {:.2}% in <= {c} s", 100.0 * e))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey));
+    }
+    legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
+/// What the upper panels of a convergence plot show against the step size.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Measure {
+    /// The error, with the change from the finest run (self-convergence).
+    Error,
+    /// The energy lost before the bang over E0.
+    Lost,
+}
+
+/// `path`: the studies of `key`: their error and their energy lost before the bang against
+/// the step size with the fitted orders, and their wall time per step against links.
+fn convergence_plot(path: &Path, a: &SweepAnalysis, key: &str, title: &str) -> anyhow::Result<()> {
+    let studies: Vec<&Study> = a.studies.iter().filter(|s| s.key == key).collect();
+    let root = SVGBackend::new(path, (900, 1200)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let panels = root.split_evenly((3, 1));
+    let h_desc = format!("step h of {key} (1/value unless the key is in s or m)");
+    for (panel, measure) in panels.iter().take(2).zip([Measure::Error, Measure::Lost]) {
+        step_panel(panel, a, &studies, measure, &h_desc, title)?;
+    }
+    cost_panel(&panels[2], &studies, title)?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
+/// One upper panel of a convergence plot: `measure` against the step size, a series and
+/// its fit per study.
+fn step_panel(
+    panel: &Area<'_>,
+    a: &SweepAnalysis,
+    studies: &[&Study],
+    measure: Measure,
+    h_desc: &str,
+    title: &str,
+) -> anyhow::Result<()> {
+    let error = measure == Measure::Error;
+    let (ys, fits): (Vec<&Vec<f64>>, Vec<Option<PowerFit>>) = studies
+        .iter()
+        .map(|s| {
+            if error {
+                (&s.err, s.err_fit)
+            } else {
+                (&s.lost, s.lost_fit)
+            }
+        })
+        .unzip();
+    let caption = if error {
+        format!("{title}: max |time error| vs {}", a.reference.label())
+    } else {
+        format!("{title}: energy lost before the bang")
+    };
+    let mut chart = log_chart(
+        panel,
+        &caption,
+        h_desc,
+        if error { "error" } else { "lost / E0" },
+        studies.iter().flat_map(|s| s.h.iter().copied()),
+        ys.iter().flat_map(|y| y.iter().copied()).chain(
+            studies
+                .iter()
+                .filter(|_| error)
+                .flat_map(|s| s.self_err.iter().copied()),
+        ),
+    )?;
+    for (si, (s, (y, fit))) in studies.iter().zip(ys.iter().zip(&fits)).enumerate() {
+        let c = color(si);
+        let pts = positive_pairs(&s.h, y);
+        let group = if s.group.is_empty() || studies.len() == 1 {
+            String::new()
+        } else {
+            format!("{}: ", s.group)
+        };
+        chart
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))
+            .map_err(err)?
+            .label(format!("{group}runs"))
+            .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
+        if let Some(f) = fit {
+            fit_line(
+                &mut chart,
+                f,
+                &s.h,
+                format!("{group}fit: order {} (R² {:.3})", order(f), f.r2),
+                c,
+            )?;
+        }
+        if error {
+            self_convergence(&mut chart, s, &group, c)?;
+        }
+    }
+    legend(&mut chart, SeriesLabelPosition::LowerRight)?;
+    Ok(())
+}
+
+/// A study's change from its finest run against the step size (open circles), with its
+/// fit, in colour `c`; `group` prefixes the labels.
+fn self_convergence<'a, 'b: 'a>(
+    chart: &mut LogChart<'a, 'b>,
+    s: &Study,
+    group: &str,
+    c: RGBColor,
+) -> anyhow::Result<()> {
+    let pts = positive_pairs(&s.h, &s.self_err);
+    chart
+        .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.stroke_width(1))))
+        .map_err(err)?
+        .label(format!("{group}change from the finest run"))
+        .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.stroke_width(1)));
+    if let Some(f) = &s.self_fit {
+        fit_line(
+            chart,
+            f,
+            &s.h,
+            format!(
+                "{group}self-convergence: order {} (R² {:.3})",
+                order(f),
+                f.r2
+            ),
+            c,
+        )?;
+    }
+    Ok(())
+}
+
+/// The lower panel of a convergence plot: wall time per step against links, with the
+/// fitted slope, per study.
+fn cost_panel(panel: &Area<'_>, studies: &[&Study], title: &str) -> anyhow::Result<()> {
+    let mut chart = log_chart(
+        panel,
+        &format!("{title}: wall time per step against links"),
+        "links",
+        "wall time per step (s)",
+        studies.iter().flat_map(|s| s.links.iter().copied()),
+        studies
+            .iter()
+            .flat_map(|s| s.wall_per_step_s.iter().copied()),
+    )?;
+    for (si, s) in studies.iter().enumerate() {
+        let c = color(si);
+        let pts = pairs(&s.links, &s.wall_per_step_s);
+        chart
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))
+            .map_err(err)?
+            .label(if s.group.is_empty() || studies.len() == 1 {
+                "runs".to_owned()
+            } else {
+                s.group.clone()
+            })
+            .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
+        if let Some(f) = &s.cost_fit {
+            fit_line(
+                &mut chart,
+                f,
+                &s.links,
+                format!("slope {} (R² {:.3})", order(f), f.r2),
+                c,
+            )?;
+        }
+    }
+    legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+    Ok(())
+}
+
+/// The final bang's ensembles: one picture per study, `bang-<key>.svg`, or
+/// `bang-<key>-<i>.svg` where the key has several groups. Returns the files written.
+fn bang_plots(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<Vec<PathBuf>> {
+    let mut written = Vec::new();
+    let keys: Vec<&str> = a.bang.iter().map(|b| b.key.as_str()).collect();
+    for (i, b) in a.bang.iter().enumerate() {
+        let alone = keys.iter().filter(|k| **k == b.key).count() == 1;
+        let stem = if alone {
+            format!("bang-{}", b.key)
+        } else {
+            format!("bang-{}-{i}", b.key)
+        };
+        let path = dir.join(format!("{stem}.svg"));
+        bang_study_plot(&path, b, title)?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+/// One panel per bang observable: its ensemble mean ± standard error against the step h
+/// of the study's key (log h).
+fn bang_study_plot(path: &Path, b: &BangStudy, title: &str) -> anyhow::Result<()> {
+    let root = SVGBackend::new(path, (1000, 1400)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let (head, body) = root.split_vertically(40);
+    head.draw(&Text::new(
+        format!(
+            "{title}: the final bang against {}{} (ensemble mean ± standard error)",
+            b.key,
+            if b.group.is_empty() {
+                String::new()
+            } else {
+                format!(", {}", b.group)
+            }
+        ),
+        (20, 12),
+        (FONT, 18),
+    ))
+    .map_err(err)?;
+    let panels = body.split_evenly((5, 2));
+    let (h0, h1) = log_range(b.h.iter().copied());
+    for (k, panel) in panels.iter().enumerate().take(BANG_OBSERVABLES.len()) {
+        let (m, se) = (&b.mean[k], &b.se[k]);
+        let lo = m.iter().zip(se).map(|(m, s)| m - s.max(0.0));
+        let hi = m.iter().zip(se).map(|(m, s)| m + s.max(0.0));
+        let (y0, y1) = range(lo.chain(hi));
+        let mut chart = ChartBuilder::on(panel)
+            .caption(BANG_OBSERVABLES[k].0, (FONT, 15))
+            .margin(8)
+            .x_label_area_size(30)
+            .y_label_area_size(70)
+            .build_cartesian_2d((h0..h1).log_scale(), y0..y1)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc(format!("h of {}", b.key))
+            .x_label_formatter(&|v| format!("{v:.0e}"))
+            .light_line_style(WHITE.mix(0.0))
+            .draw()
+            .map_err(err)?;
+        let pts = pairs(&b.h, m);
+        chart
+            .draw_series(LineSeries::new(pts.iter().copied(), SIM.stroke_width(1)))
+            .map_err(err)?;
+        chart
+            .draw_series(
+                b.h.iter()
+                    .zip(m)
+                    .zip(se)
+                    .filter(|((h, m), s)| h.is_finite() && m.is_finite() && s.is_finite())
+                    .map(|((&h, &m), &s)| {
+                        ErrorBar::new_vertical(h, m - s, m, m + s, EXACT.filled(), 6)
+                    }),
+            )
+            .map_err(err)?;
+    }
+    root.present().map_err(err)?;
+    Ok(())
+}

@@ -1,0 +1,219 @@
+//! The grid of a sweep: `--vary KEY=V1,V2,...` ([`Vary`]), their product
+//! ([`grid`]), the scene of every combination, validated before any run, and the shards
+//! (`--shard K/N`) with their file names. It runs nothing and writes nothing.
+
+use std::str::FromStr;
+
+use crate::scene::overrides::{Override, OverrideSyntaxError, check_key, scene_with_overrides};
+use crate::scene::{Scene, SceneError};
+
+/// One `--vary KEY=V1,V2,...`: a key and the values it takes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Vary {
+    /// Dotted scene key.
+    pub key: String,
+    /// The values, in the order given.
+    pub values: Vec<Override>,
+}
+
+impl FromStr for Vary {
+    type Err = OverrideSyntaxError;
+
+    fn from_str(arg: &str) -> Result<Self, Self::Err> {
+        let fail = |rule: &str| OverrideSyntaxError {
+            arg: arg.to_owned(),
+            rule: rule.to_owned(),
+        };
+        let (key, list) = arg
+            .split_once('=')
+            .ok_or_else(|| fail("expected KEY=V1,V2,..., e.g. solver.iterations=2,4,8"))?;
+        let key = key.trim();
+        check_key(key).map_err(|r| fail(&r))?;
+        let mut values = Vec::new();
+        for raw in list.split(',') {
+            let raw = raw.trim();
+            if raw.is_empty() {
+                return Err(fail("empty value in the list"));
+            }
+            values.push(Override::new(key, raw));
+        }
+        Ok(Self {
+            key: key.to_owned(),
+            values,
+        })
+    }
+}
+
+/// `--shard K/N`: the K-th (1-based) of N slices of the grid; combination `i` belongs to
+/// shard `i mod N + 1`, so slices are interleaved and of nearly equal cost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// This slice, 1..=`n`.
+    pub k: usize,
+    /// Number of slices.
+    pub n: usize,
+}
+
+impl Shard {
+    /// The whole grid.
+    pub const ALL: Shard = Shard { k: 1, n: 1 };
+
+    /// Whether combination `index` belongs to this shard.
+    pub fn contains(self, index: usize) -> bool {
+        index % self.n == self.k - 1
+    }
+}
+
+impl FromStr for Shard {
+    type Err = OverrideSyntaxError;
+
+    fn from_str(arg: &str) -> Result<Self, Self::Err> {
+        let fail = || OverrideSyntaxError {
+            arg: arg.to_owned(),
+            rule: "expected K/N with 1 <= K <= N, e.g. 3/8".into(),
+        };
+        let (k, n) = arg.split_once('/').ok_or_else(fail)?;
+        let k: usize = k.trim().parse().map_err(|_| fail())?;
+        let n: usize = n.trim().parse().map_err(|_| fail())?;
+        if k == 0 || k > n {
+            return Err(fail());
+        }
+        Ok(Self { k, n })
+    }
+}
+
+/// One point of the grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Combination {
+    /// Place in the full grid (0-based).
+    pub index: usize,
+    /// One override per varied key, in `--vary` order.
+    pub overrides: Vec<Override>,
+}
+
+/// The product grid of `varies`, last key fastest. No keys give one empty combination
+/// (the scene as it is).
+pub fn grid(varies: &[Vary]) -> Vec<Combination> {
+    let mut combos: Vec<Vec<Override>> = vec![Vec::new()];
+    for v in varies {
+        combos = combos
+            .into_iter()
+            .flat_map(|c| {
+                v.values.iter().map(move |o| {
+                    let mut c = c.clone();
+                    c.push(o.clone());
+                    c
+                })
+            })
+            .collect();
+    }
+    combos
+        .into_iter()
+        .enumerate()
+        .map(|(index, overrides)| Combination { index, overrides })
+        .collect()
+}
+
+/// A bad combination: names it and carries the scene's own error.
+#[derive(Debug, thiserror::Error)]
+#[error("combination {index} ({settings}): {source}")]
+pub struct CombinationError {
+    /// Place in the grid.
+    pub index: usize,
+    /// Its overrides, `k=v k=v`.
+    pub settings: String,
+    /// The scene's error.
+    pub source: SceneError,
+}
+
+/// Builds and validates the scene of every combination, so that a bad value stops the
+/// sweep before any run starts.
+pub fn scenes(
+    text: &str,
+    name: &str,
+    combos: &[Combination],
+) -> Result<Vec<Scene>, CombinationError> {
+    combos
+        .iter()
+        .map(|c| {
+            scene_with_overrides(text, name, &c.overrides).map_err(|source| CombinationError {
+                index: c.index,
+                settings: settings(&c.overrides),
+                source,
+            })
+        })
+        .collect()
+}
+pub(super) fn settings(overrides: &[Override]) -> String {
+    overrides
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The file name of a shard's output: `sweep.csv`, or `sweep.K-of-N.csv`.
+pub fn file_name(shard: Shard) -> String {
+    if shard == Shard::ALL {
+        "sweep.csv".into()
+    } else {
+        format!("sweep.{}-of-{}.csv", shard.k, shard.n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn vary(arg: &str) -> Vary {
+        arg.parse().unwrap()
+    }
+
+    #[test]
+    fn vary_parses_a_list() {
+        let v = vary("discretisation.links_per_turn=8, 16,32");
+        assert_eq!(v.key, "discretisation.links_per_turn");
+        let raws: Vec<&str> = v.values.iter().map(|o| o.raw.as_str()).collect();
+        assert_eq!(raws, ["8", "16", "32"]);
+        assert_eq!(v.values[1].value, toml::Value::Integer(16));
+        assert!("a=1,,2".parse::<Vary>().is_err());
+        assert!("a".parse::<Vary>().is_err());
+    }
+
+    #[test]
+    fn grid_is_the_product_last_key_fastest() {
+        let g = grid(&[vary("a=1,2"), vary("b=x,y,z")]);
+        assert_eq!(g.len(), 6);
+        let s: Vec<String> = g.iter().map(|c| settings(&c.overrides)).collect();
+        assert_eq!(s[0], "a=1 b=x");
+        assert_eq!(s[1], "a=1 b=y");
+        assert_eq!(s[3], "a=2 b=x");
+        assert_eq!(s[5], "a=2 b=z");
+        assert!(g.iter().enumerate().all(|(i, c)| c.index == i));
+        assert_eq!(grid(&[]).len(), 1);
+    }
+
+    #[test]
+    fn shards_partition_the_grid() {
+        for n in 1..=7 {
+            for len in [0, 1, 5, 6, 7, 23] {
+                let mut count = vec![0; len];
+                for k in 1..=n {
+                    let s: Shard = format!("{k}/{n}").parse().unwrap();
+                    for (i, c) in count.iter_mut().enumerate() {
+                        if s.contains(i) {
+                            *c += 1;
+                        }
+                    }
+                }
+                assert!(
+                    count.iter().all(|&c| c == 1),
+                    "n = {n}, len = {len}: {count:?}"
+                );
+            }
+        }
+        for bad in ["0/3", "4/3", "3", "a/b", "1/0"] {
+            assert!(bad.parse::<Shard>().is_err(), "{bad}");
+        }
+    }
+}
