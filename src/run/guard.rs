@@ -189,15 +189,7 @@ pub(crate) mod tests {
     use super::*;
     use crate::model::{BangRecord, EnergyLedger, Phase};
 
-    /// The yoga mat: R = 0.06 m, b = 0.005 m.
-    pub(crate) fn yoga() -> Scene {
-        Scene::from_toml_str(
-            "[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\nmass_kg = 1.5\n\
-             [push]\ncontact_speed_m_s = 0.3\n",
-            "yoga",
-        )
-        .expect("valid scene")
-    }
+    pub(crate) use crate::model::tests::yoga;
 
     /// A calm rolling step with energy `e_j` (all potential).
     pub(crate) fn step(e_j: f64) -> Observation {

@@ -231,11 +231,12 @@ impl ForceTorque {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use approx::assert_relative_eq;
 
-    fn yoga(push: f64) -> Params {
+    /// The yoga mat's parameters, pushed at `push` (m/s).
+    pub(crate) fn yoga(push: f64) -> Params {
         Params {
             outer_radius_m: 0.06,
             thickness_m: 0.005,
@@ -246,7 +247,8 @@ mod tests {
         }
     }
 
-    fn thin(push: f64) -> Params {
+    /// The thin tape's parameters, pushed at `push` (m/s).
+    pub(crate) fn thin(push: f64) -> Params {
         Params {
             outer_radius_m: 0.03,
             thickness_m: 0.0001,

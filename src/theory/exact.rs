@@ -446,29 +446,8 @@ mod tests {
 
     use super::*;
     use crate::theory::continuum::Continuum;
+    use crate::theory::continuum::tests::{thin, yoga};
     use approx::assert_relative_eq;
-
-    fn yoga(push: f64) -> Params {
-        Params {
-            outer_radius_m: 0.06,
-            thickness_m: 0.005,
-            mass_kg: 1.5,
-            core_radius_m: 0.0,
-            g_m_s2: 9.81,
-            push_speed_m_s: push,
-        }
-    }
-
-    fn thin(push: f64) -> Params {
-        Params {
-            outer_radius_m: 0.03,
-            thickness_m: 0.0001,
-            mass_kg: 0.2,
-            core_radius_m: 0.0,
-            g_m_s2: 9.81,
-            push_speed_m_s: push,
-        }
-    }
 
     #[test]
     fn sliding_kinetic_energy_of_a_thin_spool_is_errata_a18() {
