@@ -1,4 +1,5 @@
-//! The `uncoil` command line: `uncoil run SCENE [--out DIR] [--set KEY=VALUE]... [--no-mcap]`,
+//! The `uncoil` command line: `uncoil run SCENE [--out DIR] [--set KEY=VALUE]... [--no-mcap]
+//! [--live [ADDR] [--pace X]]`,
 //! `uncoil inspect RUN.mcap`, `uncoil check`, `uncoil compare`, `uncoil sweep`,
 //! `uncoil sweep-report`, `uncoil plot`.
 //!
@@ -17,7 +18,7 @@ use anyhow::Context as _;
 use clap::{Parser, Subcommand};
 
 use uncoil::output::compare::{SampleLog, table};
-use uncoil::output::mcap::McapObserver;
+use uncoil::output::view::ViewObserver;
 use uncoil::output::{CsvObserver, ReportObserver, summary};
 use uncoil::run::stop::{Status, StopReason};
 use uncoil::run::{Observer, run, run_until};
@@ -51,6 +52,12 @@ enum Command {
         /// Do not write run.mcap.
         #[arg(long)]
         no_mcap: bool,
+        /// Serve the run live to Foxglove (WebSocket) at ADDR while it goes.
+        #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = LIVE_ADDR)]
+        live: Option<std::net::SocketAddr>,
+        /// With --live: hold simulated time to X times real time (0.1: ten times slower).
+        #[arg(long, value_name = "X", requires = "live", value_parser = parse_pace)]
+        pace: Option<f64>,
     },
     /// Read a run's MCAP log back: channels, message counts, time range, metadata, ledger.
     Inspect {
@@ -122,6 +129,8 @@ fn main() -> ExitCode {
             out,
             set,
             no_mcap,
+            live,
+            pace,
         } => {
             let scene = match scene_file_with_overrides(&scene, &set) {
                 Ok(s) => s,
@@ -142,7 +151,12 @@ fn main() -> ExitCode {
             if let Err(e) = handler {
                 eprintln!("warning: Ctrl-C will not finish the files: {e}");
             }
-            match run_scene(&scene, out, !no_mcap, &stop) {
+            let view = View {
+                file: !no_mcap,
+                live,
+                pace,
+            };
+            match run_scene(&scene, out, &view, &stop) {
                 Ok((text, end)) => {
                     print!("{text}");
                     match end.status() {
@@ -223,31 +237,85 @@ fn compare(paths: &[PathBuf]) -> ExitCode {
     ExitCode::SUCCESS
 }
 
+/// What of a run Foxglove sees.
+struct View {
+    /// Write run.mcap.
+    file: bool,
+    /// Serve the run live here.
+    live: Option<std::net::SocketAddr>,
+    /// Simulated seconds per real second.
+    pace: Option<f64>,
+}
+
+/// `--live`'s default address.
+#[cfg(feature = "live")]
+const LIVE_ADDR: &str = uncoil::output::view::live::DEFAULT_ADDR;
+#[cfg(not(feature = "live"))]
+const LIVE_ADDR: &str = "127.0.0.1:8765";
+
+fn parse_pace(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
+        _ => Err(format!(
+            "{text}: a pace is a positive number, simulated seconds per real second"
+        )),
+    }
+}
+
+/// Starts the live server of `log`, if asked for.
+fn serve(log: &mut ViewObserver, view: &View) -> anyhow::Result<()> {
+    let Some(addr) = view.live else {
+        return Ok(());
+    };
+    #[cfg(feature = "live")]
+    {
+        let at = log.serve(addr)?;
+        eprintln!(
+            "serving the run live at ws://{at}: open it in Foxglove (Open connection -> \
+             Foxglove WebSocket) with the layout tools/foxglove-layout.json"
+        );
+        if let Some(x) = view.pace {
+            log.pace(x);
+        }
+        Ok(())
+    }
+    #[cfg(not(feature = "live"))]
+    {
+        let _ = log;
+        anyhow::bail!("--live {addr}: this uncoil was built without the `live` feature")
+    }
+}
+
 /// Runs `scene` into its output folder; returns the summary and why the run stopped.
 fn run_scene(
     scene: &Scene,
     out: Option<PathBuf>,
-    mcap: bool,
+    view: &View,
     stop: &AtomicBool,
 ) -> anyhow::Result<(String, StopReason)> {
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&scene.name));
     std::fs::create_dir_all(&dir)
         .with_context(|| format!("cannot create output folder {}", dir.display()))?;
-    eprintln!("running {} into {} ...", scene.name, dir.display());
     let mut csv = CsvObserver::new(&dir);
     let mut report = ReportObserver::new(&dir);
-    let mut log = McapObserver::new(&dir);
+    let mut log = if view.file {
+        ViewObserver::new(&dir)
+    } else {
+        ViewObserver::without_file()
+    };
+    serve(&mut log, view)?;
+    eprintln!("running {} into {} ...", scene.name, dir.display());
     let mut observers: Vec<&mut dyn Observer> = vec![&mut csv, &mut report];
-    if mcap {
+    if view.file || view.live.is_some() {
         observers.push(&mut log);
     }
     let report = run_until(scene, &mut observers, stop)?;
     let mut text = summary(&report, &dir);
-    if mcap {
+    if let Some(path) = log.path() {
         text.push_str(&format!(
             "Wrote {0}: open it in Foxglove with the layout tools/foxglove-layout.json, or list \
              it with `uncoil inspect {0}`\n",
-            log.path().display()
+            path.display()
         ));
     }
     Ok((text, report.stop))

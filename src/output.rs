@@ -7,9 +7,9 @@
 pub mod compare;
 pub mod fields;
 pub mod inspect;
-pub mod mcap;
 pub mod summary;
 pub mod table;
+pub mod view;
 
 pub use summary::summary;
 

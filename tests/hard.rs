@@ -171,7 +171,7 @@ fn a_slippery_floor_run_writes_the_same_bytes_when_repeated() {
     for d in &dirs {
         let mut csv = uncoil::output::CsvObserver::new(d.path());
         let mut json = uncoil::output::ReportObserver::new(d.path());
-        let mut log = uncoil::output::mcap::McapObserver::new(d.path());
+        let mut log = uncoil::output::view::ViewObserver::new(d.path());
         run(&scene, &mut [&mut csv, &mut json, &mut log]).unwrap();
         csvs.push(std::fs::read(d.path().join("samples.csv")).unwrap());
         mcaps.push(std::fs::read(d.path().join("run.mcap")).unwrap());
