@@ -281,7 +281,7 @@ fn serve(log: &mut ViewObserver, view: &View) -> anyhow::Result<()> {
     }
     #[cfg(not(feature = "live"))]
     {
-        let _ = log;
+        let _ = (log, view.pace);
         anyhow::bail!("--live {addr}: this uncoil was built without the `live` feature")
     }
 }

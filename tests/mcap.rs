@@ -496,3 +496,43 @@ fn ctrl_c_stops_the_run_and_leaves_a_finished_log() {
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["stop"]["reason"], "interrupted");
 }
+
+#[test]
+fn a_live_run_without_a_viewer_does_not_wait_and_pace_needs_live() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("small.toml");
+    std::fs::write(
+        &scene,
+        "[tape]\nouter_radius_m = 0.02\nthickness_m = 0.004\nmass_kg = 0.2\n\
+         [push]\ncontact_speed_m_s = 0.3\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    // Port 0: any free port. Nobody connects; the run goes on and finishes its files.
+    Command::cargo_bin("uncoil")
+        .unwrap()
+        .args(["run", "--live", "127.0.0.1:0", "--out"])
+        .arg(&out)
+        .arg(&scene)
+        .timeout(Duration::from_secs(120))
+        .assert()
+        .success()
+        .stderr(predicate::str::contains(
+            "serving the run live at ws://127.0.0.1:",
+        ));
+    assert!(out.join("samples.csv").exists());
+    assert!(out.join("run.mcap").exists());
+    Command::cargo_bin("uncoil")
+        .unwrap()
+        .args(["run", "--pace", "0.1"])
+        .arg(&scene)
+        .assert()
+        .code(2);
+    Command::cargo_bin("uncoil")
+        .unwrap()
+        .args(["run", "--live", "127.0.0.1:0", "--pace=0"])
+        .arg(&scene)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("a pace is a positive number"));
+}

@@ -25,7 +25,7 @@
 //!   sight along the 2 m of a yoga mat.
 //!
 //! Messages are stamped with simulation time (ns from 0). `run.mcap` also has metadata
-//! records (see [`file`]). With a pace ([`ViewObserver::pace`]) the observer holds the run
+//! records (see [`mod@file`]). With a pace ([`ViewObserver::pace`]) the observer holds the run
 //! back so that simulated time goes at that multiple of real time, the bang included.
 
 use std::path::{Path, PathBuf};

@@ -1,5 +1,6 @@
 // Starts the Foxglove Studio app of @foxglove/studio-base 1.48.0 the way its web build does
-// (deep links from the URL, remote and local MCAP data sources), with the settings and the
+// (deep links from the URL, remote and local MCAP files and Foxglove WebSocket connections as
+// data sources), with the settings and the
 // layouts kept in memory. The UMD bundle put its exports on `window`.
 /* global React, ReactDOM */
 "use strict";
@@ -59,7 +60,11 @@ async function main() {
   await window.initI18n();
   const app = React.createElement(window.App, {
     deepLinks: [window.location.href],
-    dataSources: [new window.RemoteDataSourceFactory(), new window.McapLocalDataSourceFactory()],
+    dataSources: [
+      new window.RemoteDataSourceFactory(),
+      new window.McapLocalDataSourceFactory(),
+      new window.FoxgloveWebSocketDataSourceFactory(),
+    ],
     appConfiguration: new MemoryAppConfiguration({
       [window.AppSetting.TELEMETRY_ENABLED]: false,
       [window.AppSetting.CRASH_REPORTING_ENABLED]: false,

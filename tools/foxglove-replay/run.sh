@@ -4,6 +4,10 @@
 # appear and the layout's panels show, and saves a screenshot.
 # Usage: tools/foxglove-replay/run.sh [RUN.mcap] [SCREENSHOT.png]
 #   (defaults: a fresh yoga-mat run; docs/foxglove-replay.png)
+#        tools/foxglove-replay/run.sh --live [SCREENSHOT.png]
+#   connects the same build to `uncoil run scenes/yoga-mat.toml --live` on 127.0.0.1, paced at
+#   0.05 (about 50 s), and asserts that messages arrive while it runs (default screenshot:
+#   docs/foxglove-live.png).
 # Needs node and npm, and Debian's chromium (installed with apt-get when missing and root).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -17,6 +21,17 @@ if ! command -v chromium > /dev/null; then
   fi
 fi
 (cd "$here" && npm ci --silent --no-audit --no-fund --ignore-scripts)
+if [ "${1:-}" = --live ]; then
+  cargo build --locked --quiet
+  port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+  out="$(mktemp -d)"
+  trap 'rm -rf "$out"' EXIT
+  CHROMIUM="$(command -v chromium)" node "$here/replay.mjs" --live "$port" \
+    tools/foxglove-layout.json "${2:-docs/foxglove-live.png}" -- \
+    target/debug/uncoil run scenes/yoga-mat.toml --no-mcap --out "$out" \
+    --live "127.0.0.1:$port" --pace 0.05
+  exit
+fi
 mcap=${1:-}
 if [ -z "$mcap" ]; then
   out="$(mktemp -d)"
