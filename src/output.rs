@@ -74,7 +74,8 @@ pub(crate) fn remove_stale(path: &Path) -> anyhow::Result<()> {
     }
 }
 
-fn partial_path(path: &Path) -> PathBuf {
+/// `path` with `.partial` appended to its name: where a file is written until it is complete.
+pub(crate) fn partial_path(path: &Path) -> PathBuf {
     let mut name = path.file_name().unwrap_or_default().to_os_string();
     name.push(".partial");
     path.with_file_name(name)

@@ -426,13 +426,7 @@ max_dt_s = 0.00001
 #[test]
 fn no_mcap_flag_writes_no_log() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("small.toml");
-    std::fs::write(
-        &scene,
-        "[tape]\nouter_radius_m = 0.02\nthickness_m = 0.004\nmass_kg = 0.2\n\
-         [push]\ncontact_speed_m_s = 0.3\n",
-    )
-    .unwrap();
+    let scene = small_scene(dir.path());
     let out = dir.path().join("out");
     Command::cargo_bin("uncoil")
         .unwrap()
@@ -500,13 +494,7 @@ fn ctrl_c_stops_the_run_and_leaves_a_finished_log() {
 #[test]
 fn a_live_run_without_a_viewer_does_not_wait_and_pace_needs_live() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("small.toml");
-    std::fs::write(
-        &scene,
-        "[tape]\nouter_radius_m = 0.02\nthickness_m = 0.004\nmass_kg = 0.2\n\
-         [push]\ncontact_speed_m_s = 0.3\n",
-    )
-    .unwrap();
+    let scene = small_scene(dir.path());
     let out = dir.path().join("out");
     // Port 0: any free port. Nobody connects; the run goes on and finishes its files.
     Command::cargo_bin("uncoil")
@@ -535,4 +523,16 @@ fn a_live_run_without_a_viewer_does_not_wait_and_pace_needs_live() {
         .assert()
         .code(2)
         .stderr(predicate::str::contains("a pace is a positive number"));
+}
+
+/// A small scene file in `dir`: a few turns, quick to run.
+fn small_scene(dir: &Path) -> PathBuf {
+    let scene = dir.join("small.toml");
+    std::fs::write(
+        &scene,
+        "[tape]\nouter_radius_m = 0.02\nthickness_m = 0.004\nmass_kg = 0.2\n\
+         [push]\ncontact_speed_m_s = 0.3\n",
+    )
+    .unwrap();
+    scene
 }

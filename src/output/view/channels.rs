@@ -72,8 +72,7 @@ pub fn schema_named<T: Encode>(package: &str, message: &str) -> Schema {
 /// sample is the one definition of both.
 ///
 /// The log is for viewing: a `float` keeps 7 significant digits, far finer than a plot
-/// shows, in half the bytes of a `double` (the yoga mat's `/state` shrinks from 0.74 to
-/// 0.39 MB compressed); `samples.csv` keeps 10. A quantity that does not exist (a reference
+/// shows, in half the bytes of a `double`; `samples.csv` keeps 10. A quantity that does not exist (a reference
 /// past its end) is `NaN`; a zero is not written, as proto3 omits default values.
 #[derive(Debug, Clone, Copy)]
 pub struct State(pub Sample);

@@ -19,6 +19,7 @@ use std::sync::Arc;
 use anyhow::Context as _;
 use foxglove::{Context, McapCompression, McapWriteOptions, McapWriterHandle};
 
+use crate::output::partial_path as partial;
 use crate::run::RunReport;
 use crate::scene::Scene;
 
@@ -29,13 +30,6 @@ const CHUNK_SIZE: u64 = 1024 * 1024;
 pub struct McapFile {
     path: PathBuf,
     handle: McapWriterHandle<BufWriter<File>>,
-}
-
-/// `path` with `.partial` appended to its name.
-pub fn partial(path: &Path) -> PathBuf {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(".partial");
-    path.with_file_name(name)
 }
 
 fn pairs(pairs: &[(&str, String)]) -> BTreeMap<String, String> {

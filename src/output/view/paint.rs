@@ -104,15 +104,23 @@ pub(super) fn drawn(nodes: &[[f64; 2]], thin: Thin) -> Vec<Point3> {
         .collect()
 }
 
+/// `n` nodes of which only the two ends are kept so far.
+fn ends_kept(n: usize) -> Vec<bool> {
+    let mut keep = vec![false; n];
+    if n > 0 {
+        keep[0] = true;
+        keep[n - 1] = true;
+    }
+    keep
+}
+
 /// Which nodes Douglas-Peucker keeps within `tol_m`.
 fn douglas_peucker(nodes: &[[f64; 2]], tol_m: f64) -> Vec<bool> {
     let n = nodes.len();
-    let mut keep = vec![false; n];
+    let mut keep = ends_kept(n);
     if n == 0 {
         return keep;
     }
-    keep[0] = true;
-    keep[n - 1] = true;
     let mut stack = vec![(0, n - 1)];
     while let Some((i, j)) = stack.pop() {
         let far = (i + 1..j)
@@ -133,12 +141,7 @@ fn douglas_peucker(nodes: &[[f64; 2]], tol_m: f64) -> Vec<bool> {
 /// farthest one whose chord passes within `tol_m` of every node between.
 fn curve_walk(nodes: &[[f64; 2]], tol_m: f64) -> Vec<bool> {
     let n = nodes.len();
-    let mut keep = vec![false; n];
-    if n == 0 {
-        return keep;
-    }
-    keep[0] = true;
-    keep[n - 1] = true;
+    let mut keep = ends_kept(n);
     let mut anchor = 0;
     while anchor + 1 < n {
         let mut next = anchor + 1;

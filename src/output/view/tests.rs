@@ -199,8 +199,9 @@ fn a_crash_leaves_the_completed_chunks_readable() {
             Err(_) => break,
         }
     }
+    // All but the last, unfinished chunk: at least three fifths, as before.
     assert!(
-        read > 0 && read < n,
+        read >= 3 * n / 5 && read < n,
         "{read} of {n} messages readable after a crash, expected the completed chunks"
     );
     assert!(!dir.path().join("run.mcap").exists(), "no finished file");
