@@ -33,7 +33,7 @@ use rapier2d_f64::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::scene::Scene;
-use crate::spiral::{Spiral, SpiralMoments, rotate};
+use crate::spiral::{Placed, Spiral, SpiralMoments, rotate};
 
 mod bang;
 mod build;

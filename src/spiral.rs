@@ -178,6 +178,33 @@ pub fn rotate(v: [f64; 2], angle: f64) -> [f64; 2] {
     [c * v[0] - s * v[1], s * v[0] + c * v[1]]
 }
 
+/// Points of a curve in the spiral's body frame, and where that frame stands in the world:
+/// turned by `rotation_rad` counter-clockwise about the body origin, which sits at
+/// `origin_m`. A wound coil is rigid, so its points stay the same while it rolls; only the
+/// pose moves.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Placed {
+    /// Where the body origin (the spiral centre) is in the world (m).
+    pub origin_m: [f64; 2],
+    /// Rotation of the body frame (rad), counter-clockwise.
+    pub rotation_rad: f64,
+    /// The curve in the body frame (m).
+    pub points_m: Vec<[f64; 2]>,
+}
+
+impl Placed {
+    /// Where the body-frame point `p` is in the world (m).
+    pub fn to_world(&self, p: [f64; 2]) -> [f64; 2] {
+        let q = rotate(p, self.rotation_rad);
+        [self.origin_m[0] + q[0], self.origin_m[1] + q[1]]
+    }
+
+    /// The curve in the world frame (m).
+    pub fn world_points(&self) -> Vec<[f64; 2]> {
+        self.points_m.iter().map(|&p| self.to_world(p)).collect()
+    }
+}
+
 /// Cumulative mass moments of a uniform line mass along the spiral midline: the mass, first
 /// moment and second moment (about the spiral centre) of the part between `psi_in` and
 /// `psi`, per unit line density. Tabulated once, evaluated anywhere to quadrature accuracy.

@@ -310,23 +310,58 @@ fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
     assert!(entity(last, "ghost/exact").is_none());
     assert_eq!(last["deletions"][0]["id"], "ghost/exact");
     assert!(entity(last, "ghost/eq7").is_some());
-    // At t = 0 both ghosts touch the floor where the tape does.
-    let exact0 = &entity(first, "ghost/exact").unwrap()["lines"][0]["points"][0];
+    // At t = 0 both ghosts touch the floor where the tape does. The exact coil is drawn in
+    // its body frame, from the inner end out to the contact point, and placed by its pose.
+    let exact_line = &entity(first, "ghost/exact").unwrap()["lines"][0];
+    let contact = in_world(
+        exact_line,
+        exact_line["points"].as_array().unwrap().last().unwrap(),
+    );
     let b = logged.scene.tape.thickness_m;
-    assert!(exact0["x"].as_f64().unwrap().abs() < 1e-6);
-    assert!((exact0["y"].as_f64().unwrap() - 0.5 * b).abs() < 1e-6);
-    let eq7 = &entity(first, "ghost/eq7").unwrap()["lines"];
     let big_r = logged.scene.tape.outer_radius_m;
-    let spoke_tip = &eq7[1]["points"][1];
+    assert!(contact[0].abs() < 1e-6, "{contact:?}");
+    assert!((contact[1] - 0.5 * b).abs() < 1e-6, "{contact:?}");
+    // The wound coil repeats its body-frame points from drawing to drawing while it rolls:
+    // a drawing keeps the one before's points from the inner end out, all but the last
+    // few, where the tape left the coil. Only the pose moves.
+    let scenes = &r.messages["/scene"];
+    for k in [1, 50, 100] {
+        let line = |m: &Value| entity(m, "tape/on_coil").unwrap()["lines"][0].clone();
+        let (before, after) = (line(&scenes[k].1), line(&scenes[k + 1].1));
+        let (pb, pa) = (
+            before["points"].as_array().unwrap(),
+            after["points"].as_array().unwrap(),
+        );
+        let same = pb.iter().zip(pa).take_while(|(x, y)| x == y).count();
+        assert!(
+            pa.len() <= pb.len() && same + 3 >= pa.len() && pa.len() > 10,
+            "drawing {k}: {same} of {} points repeated, {} before",
+            pa.len(),
+            pb.len()
+        );
+        assert_ne!(before["pose"], after["pose"], "drawing {k}: the coil moved");
+        // The outermost wound node, placed, is where the tape meets the floor: within a
+        // link's length of it.
+        let outer = in_world(&after, pa.last().unwrap());
+        let link = 2.0 * std::f64::consts::PI * big_r / 32.0;
+        assert!(outer[1] > 0.0 && outer[1] < link, "drawing {k}: {outer:?}");
+    }
+    // Eq. (7)'s coil is a disc of radius R standing on y = 0, its spoke pointing down.
+    let eq7 = entity(first, "ghost/eq7").unwrap();
+    let spoke = &eq7["lines"][0]["points"];
     assert!(
-        spoke_tip["x"].as_f64().unwrap().abs() < 1e-6,
+        spoke[1]["x"].as_f64().unwrap().abs() < 1e-6,
         "spoke points down"
     );
     assert!(
-        spoke_tip["y"].as_f64().unwrap().abs() < 1e-6,
-        "circle stands on y = 0"
+        spoke[1]["y"].as_f64().unwrap().abs() < 1e-6,
+        "spoke ends on y = 0"
     );
-    assert!((eq7[1]["points"][0]["y"].as_f64().unwrap() - big_r).abs() < 1e-6);
+    assert!((spoke[0]["y"].as_f64().unwrap() - big_r).abs() < 1e-6);
+    let disc = &eq7["cylinders"][0];
+    assert!((disc["pose"]["position"]["y"].as_f64().unwrap() - big_r).abs() < 1e-6);
+    assert!((disc["size"]["x"].as_f64().unwrap() - 2.0 * big_r).abs() < 1e-6);
+    assert!((disc["size"]["y"].as_f64().unwrap() - 2.0 * big_r).abs() < 1e-6);
     for e in first["entities"].as_array().unwrap() {
         assert_eq!(e["frame_id"], "world");
     }
@@ -376,6 +411,16 @@ fn inspect_reads_a_cut_off_file_as_far_as_its_data_goes() {
     let whole = uncoil::output::inspect::inventory(&bytes).unwrap();
     let half = uncoil::output::inspect::inventory(&bytes[..bytes.len() / 2]).unwrap();
     assert!(whole.finished && !half.finished);
+    // Each channel's uncompressed bytes, as a plain reader of the file counts them.
+    let mut state_bytes = 0;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        if m.channel.topic == "/state" {
+            state_bytes += m.data.len() as u64;
+        }
+    }
+    assert!(state_bytes > 0);
+    assert_eq!(whole.channels["/state"].message_bytes, state_bytes);
     assert!(half.read_error.is_some());
     let count = |inv: &uncoil::output::inspect::Inventory| -> u64 {
         inv.channels.values().map(|c| c.messages).sum()
@@ -523,6 +568,19 @@ fn a_live_run_without_a_viewer_does_not_wait_and_pace_needs_live() {
         .assert()
         .code(2)
         .stderr(predicate::str::contains("a pace is a positive number"));
+}
+
+/// A point of a line primitive placed in the world by the line's pose (a rotation about z).
+fn in_world(line: &Value, p: &Value) -> [f64; 2] {
+    let num = |v: &Value| v.as_f64().unwrap_or(0.0);
+    let (o, q) = (&line["pose"]["position"], &line["pose"]["orientation"]);
+    let angle = 2.0 * num(&q["z"]).atan2(num(&q["w"]));
+    let (sin, cos) = angle.sin_cos();
+    let (x, y) = (num(&p["x"]), num(&p["y"]));
+    [
+        num(&o["x"]) + cos * x - sin * y,
+        num(&o["y"]) + sin * x + cos * y,
+    ]
 }
 
 /// A small scene file in `dir`: a few turns, quick to run.

@@ -78,11 +78,10 @@ impl Model {
         }
     }
 
-    /// The link nodes in the world frame (m), for drawing: `(off, wound)`. `off` runs from
-    /// the tape's outer end through the frozen and the moving links that left the coil;
-    /// `wound` runs from the coil's outermost attached node inward. Consecutive nodes bound
-    /// one link; either list is empty when it has no link.
-    pub fn link_nodes(&self) -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
+    /// The nodes of the links that left the coil, in the world frame (m), for drawing: from
+    /// the tape's outer end through the frozen and the moving links. Consecutive nodes bound
+    /// one link; empty while no link has left.
+    pub fn off_coil_nodes(&self) -> Vec<[f64; 2]> {
         let mut off = self.frozen_nodes.clone();
         for (i, &piece) in self.free.iter().enumerate() {
             if i == 0 {
@@ -96,21 +95,29 @@ impl Model {
             let count = piece.last - piece.first + 2 - skip_far;
             off.extend(nodes.take(count).map(|p| [p.x, p.y]));
         }
-        let mut wound = Vec::new();
-        if let Some(coil) = self.coil {
-            let pose = self.world.bodies[coil].position();
-            let attached = &self.links[self.first_attached..];
-            let nodes = attached
-                .first()
-                .map(|l| l.near)
-                .into_iter()
-                .chain(attached.iter().map(|l| l.far));
-            wound.extend(nodes.map(|n| {
-                let p = pose.transform_point(Vector::new(n[0], n[1]));
-                [p.x, p.y]
-            }));
-        }
-        (off, wound)
+        off
+    }
+
+    /// The nodes of the links still wound, in the coil's body frame (the spiral's) from the
+    /// innermost node outward, placed where the coil is; `None` once the coil is released.
+    /// The coil is one rigid body, so the nodes stay the same while it rolls, and a drawing
+    /// of them changes only where the tape leaves it.
+    pub fn wound_nodes(&self) -> Option<Placed> {
+        let coil = self.coil?;
+        let body = &self.world.bodies[coil];
+        let attached = &self.links[self.first_attached..];
+        let points_m = attached
+            .iter()
+            .rev()
+            .map(|l| l.far)
+            .chain(attached.first().map(|l| l.near))
+            .collect();
+        let origin = body.translation();
+        Some(Placed {
+            origin_m: [origin.x, origin.y],
+            rotation_rad: body.rotation().angle(),
+            points_m,
+        })
     }
 
     /// Where the tape's free (inner) end is: x of its innermost node (m).
@@ -124,8 +131,9 @@ impl Model {
         {
             return n[0];
         }
-        let (_, wound) = self.link_nodes();
-        wound.last().map_or(0.0, |n| n[0])
+        self.wound_nodes()
+            .and_then(|w| w.points_m.first().map(|&p| w.to_world(p)[0]))
+            .unwrap_or(0.0)
     }
 
     /// The tape's midline length as the links lay it: the sum of their lengths (m).

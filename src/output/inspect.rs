@@ -23,6 +23,8 @@ pub struct ChannelInfo {
     pub message_encoding: String,
     /// Messages read.
     pub messages: u64,
+    /// Their bytes, before the file's compression.
+    pub message_bytes: u64,
 }
 
 /// What a file holds, read message by message.
@@ -104,8 +106,10 @@ pub fn inventory(bytes: &[u8]) -> anyhow::Result<Inventory> {
                     .map_or_else(String::new, |s| s.encoding.clone()),
                 message_encoding: m.channel.message_encoding.clone(),
                 messages: 0,
+                message_bytes: 0,
             });
         entry.messages += 1;
+        entry.message_bytes += m.data.len() as u64;
         if last.get(&topic).is_some_and(|&t| t > m.log_time) {
             time_ordered = false;
         }
@@ -181,14 +185,19 @@ pub fn describe(path: &Path, inv: &Inventory) -> String {
     let _ = writeln!(o, "Channels:");
     let _ = writeln!(
         o,
-        "  {:<10} {:<25} {:<11} {:<6} {:>9}",
-        "topic", "schema", "schema enc", "enc", "messages"
+        "  {:<10} {:<25} {:<11} {:<9} {:>9} {:>15}",
+        "topic", "schema", "schema enc", "enc", "messages", "uncompressed"
     );
     for c in inv.channels.values() {
         let _ = writeln!(
             o,
-            "  {:<10} {:<25} {:<11} {:<6} {:>9}",
-            c.topic, c.schema, c.schema_encoding, c.message_encoding, c.messages
+            "  {:<10} {:<25} {:<11} {:<9} {:>9} {:>15}",
+            c.topic,
+            c.schema,
+            c.schema_encoding,
+            c.message_encoding,
+            c.messages,
+            format!("{} bytes", c.message_bytes)
         );
     }
     for (name, map) in &inv.metadata {

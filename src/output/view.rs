@@ -8,13 +8,15 @@
 //! - `/scene`: `foxglove.SceneUpdate`, the SDK's own type and schema. Entities in frame
 //!   `world`, metres, x along the floor and y up: `floor` (a cube under `y = 0`),
 //!   `tape/off_coil` and `tape/on_coil` (one line strip each, through the link nodes, as thick
-//!   as the tape), `ghost/eq7` (the coil of eq. 7: a circle with a spoke showing its
-//!   rotation) and `ghost/exact` (the exact-geometry model's wound spiral), each in its own
-//!   colour. Every message carries every entity, so a seek (or a viewer that connects late)
-//!   draws the whole scene from one message; a ghost past its reference's end is deleted.
-//!   The tape off the coil keeps only the nodes that stand out by more than b/20 from a
-//!   straight run (the flat laid tape becomes a few segments), and a line has at most 2048
-//!   points (a thin tape's thousands of wound links are then drawn through every k-th node).
+//!   as the tape), `ghost/eq7` (the coil of eq. 7: a translucent disc with a spoke showing
+//!   its rotation) and `ghost/exact` (the exact-geometry model's wound spiral), each in its
+//!   own colour. Every message carries every entity, so a seek (or a viewer that connects
+//!   late) draws the whole scene from one message; a ghost past its reference's end is
+//!   deleted. The wound coil and the exact ghost are drawn in their own body frames, placed
+//!   by the line's pose: a rigid coil keeps its points from drawing to drawing, so the log's
+//!   compression stores them about once. Lines keep only the nodes a chord cannot pass
+//!   within tolerance (b/20 off the coil, b/4 on it); a coil of more than 1024 such nodes (a
+//!   thin tape) is drawn through its outermost 1024, with a disc for the turns inside.
 //! - `/state`: one message per sample, its fields as `float`s: schema `uncoil.State`, made
 //!   from the [`Sample`]'s fields (see [`channels::State`]).
 //! - `/events`: detaches (one message per step that shed links, normally one link), the
@@ -176,11 +178,13 @@ impl Observer for ViewObserver {
 
     fn observe_frame(&mut self, frame: &Frame) -> anyhow::Result<()> {
         self.wait_for(frame.t_s);
-        let Some(painter) = &self.painter else {
+        let Some(painter) = &mut self.painter else {
             return Ok(());
         };
         let ns = stamp_ns(frame.t_s);
-        self.channels.scene.log_with_time(&painter.paint(frame), ns);
+        self.channels
+            .scene
+            .log_with_time(&channels::Drawing(painter.paint(frame)), ns);
         self.channels
             .tf
             .log_with_time(&paint::contact_transform(frame), ns);

@@ -7,11 +7,12 @@ use std::f64::consts::PI;
 
 use serde::Serialize;
 
+use crate::spiral::{Placed, rotate};
 use crate::theory::{continuum::Continuum, exact::ExactGeometry};
 
 /// The coil of eq. (7) drawn as a disc: eq. (7) knows only its radius and its contact
 /// position, and rolling without slip fixes its rotation.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GhostDisc {
     /// Centre (m): `(x_ref, r_ref)`, the disc standing on the floor `y = 0`.
     pub centre_m: [f64; 2],
@@ -37,53 +38,73 @@ impl GhostDisc {
 
 /// The exact-geometry model's coil: the wound part of the midline spiral, placed with its
 /// lowest point on the laid tape's midline at the model's contact position.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct GhostSpiral {
     /// Contact position (m).
     pub contact_m: [f64; 2],
-    /// Rotation of the spiral's body frame (rad), counter-clockwise.
-    pub rotation_rad: f64,
-    /// The wound midline from the contact point inward (m), `points_per_turn` per turn.
-    pub points_m: Vec<[f64; 2]>,
+    /// The wound midline in the spiral's body frame from its inner end out to the contact
+    /// point, `points_per_turn` per turn at fixed parameters, so that only the outer end
+    /// changes from one instant to the next; placed where the model's coil is.
+    pub spiral: Placed,
+}
+
+/// The exact model's wound midline at fixed parameters, `points_per_turn` a turn from its
+/// inner end out: computed once, and each instant's [`GhostSpiral`] draws the part of it still
+/// wound.
+#[derive(Debug, Clone)]
+pub struct SpiralGrid {
+    /// The spiral parameters, increasing.
+    psi: Vec<f64>,
+    /// The midline's points at them, in the spiral's body frame (m).
+    points_m: Vec<[f64; 2]>,
+}
+
+impl SpiralGrid {
+    /// The grid of the exact model's spiral.
+    pub fn new(exact: &ExactGeometry, points_per_turn: u32) -> Self {
+        let spiral = exact.spiral();
+        let step = 2.0 * PI / f64::from(points_per_turn.max(3));
+        let psi: Vec<f64> = (0..)
+            .map(|k| spiral.psi_in + f64::from(k) * step)
+            .take_while(|&q| q < spiral.psi_out)
+            .collect();
+        let points_m = psi.iter().map(|&q| spiral.point(q)).collect();
+        Self { psi, points_m }
+    }
 }
 
 impl GhostSpiral {
-    /// The exact-geometry coil at time `t_s`, `None` past its tabulated end.
+    /// The exact-geometry coil at time `t_s`, `None` past its tabulated end: the grid's points
+    /// inside the contact parameter, then the contact point.
     pub fn at(
         exact: &ExactGeometry,
+        grid: &SpiralGrid,
         thickness_m: f64,
         t_s: f64,
-        points_per_turn: u32,
     ) -> Option<Self> {
         let psi = exact.psi_at_time(t_s)?;
         let spiral = exact.spiral();
         let rotation = spiral.rotation_with_bottom_at(psi);
-        let (sin, cos) = rotation.sin_cos();
-        let turn = |v: [f64; 2]| [cos * v[0] - sin * v[1], sin * v[0] + cos * v[1]];
-        let low = turn(spiral.point(psi));
+        let low = rotate(spiral.point(psi), rotation);
         let contact = [spiral.arc(psi, spiral.psi_out), 0.5 * thickness_m];
-        let step = 2.0 * PI / f64::from(points_per_turn.max(3));
-        let mut points = Vec::new();
-        let mut q = psi;
-        loop {
-            let p = turn(spiral.point(q));
-            points.push([contact[0] + p[0] - low[0], contact[1] + p[1] - low[1]]);
-            if q <= spiral.psi_in {
-                break;
-            }
-            q = (q - step).max(spiral.psi_in);
-        }
+        let inner = grid.psi.partition_point(|&q| q < psi);
+        let mut points_m = Vec::with_capacity(inner + 1);
+        points_m.extend_from_slice(&grid.points_m[..inner]);
+        points_m.push(spiral.point(psi));
         Some(Self {
             contact_m: contact,
-            rotation_rad: rotation,
-            points_m: points,
+            spiral: Placed {
+                origin_m: [contact[0] - low[0], contact[1] - low[1]],
+                rotation_rad: rotation,
+                points_m,
+            },
         })
     }
 }
 
 /// The tape and its references at one instant, for drawing. Coordinates in metres in the
 /// world frame: x along the floor, y up, the floor surface at `y = 0`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Frame {
     /// Simulated time (s).
     pub t_s: f64,
@@ -92,8 +113,9 @@ pub struct Frame {
     /// Nodes of the links that left the coil (laid, hanging or in the bang), from the outer
     /// end; consecutive nodes bound a link.
     pub off_coil_m: Vec<[f64; 2]>,
-    /// Nodes of the links still wound on the coil, from the outermost inward.
-    pub on_coil_m: Vec<[f64; 2]>,
+    /// Nodes of the links still wound on the coil, in the coil's body frame from the
+    /// innermost outward, placed where the coil is; no points once it is released.
+    pub on_coil: Placed,
     /// The coil of eq. (7), `None` past its end.
     pub eq7: Option<GhostDisc>,
     /// The exact-geometry model's coil, `None` past its end.
@@ -190,14 +212,15 @@ mod tests {
     #[test]
     fn exact_spiral_touches_the_midline_at_its_contact() {
         let e = ExactGeometry::new(params(), 0.0025);
-        let g = GhostSpiral::at(&e, 0.005, 1.0, 32).expect("t = 1 s is tabulated");
-        // Its first point is the contact; no point dips below the laid midline y = b/2.
-        assert!((g.points_m[0][0] - g.contact_m[0]).abs() < 1e-12);
-        let lowest = g
-            .points_m
-            .iter()
-            .map(|p| p[1])
-            .fold(f64::INFINITY, f64::min);
+        let grid = SpiralGrid::new(&e, 32);
+        let g = GhostSpiral::at(&e, &grid, 0.005, 1.0).expect("t = 1 s is tabulated");
+        // Its last point, placed, is the contact; no point dips below the laid midline
+        // y = b/2.
+        let world = g.spiral.world_points();
+        let contact = world.last().unwrap();
+        assert!((contact[0] - g.contact_m[0]).abs() < 1e-12);
+        assert!((contact[1] - g.contact_m[1]).abs() < 1e-12);
+        let lowest = world.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
         assert!(
             lowest > 0.0025 - 1e-4,
             "lowest point {lowest:.6} m, expected >= b/2 = 0.0025 m"

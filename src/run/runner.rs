@@ -8,7 +8,7 @@ use std::time::Instant;
 use crate::model::{BangEnd, Model, Observation, Phase};
 use crate::run::Observer;
 use crate::run::force_window::ForceWindow;
-use crate::run::frame::{Event, Frame, GhostDisc, GhostSpiral};
+use crate::run::frame::{Event, Frame, GhostDisc, GhostSpiral, SpiralGrid};
 use crate::run::guard::{self, Guard};
 use crate::run::limits::Applicability;
 use crate::run::milestones::Milestones;
@@ -54,6 +54,8 @@ pub(crate) struct Runner<'s> {
     max_pen: f64,
     frame_interval: f64,
     next_frame: f64,
+    /// The exact model's spiral for its ghost, once frames are drawn.
+    ghost_grid: Option<SpiralGrid>,
 }
 
 impl<'s> Runner<'s> {
@@ -76,6 +78,9 @@ impl<'s> Runner<'s> {
             } else {
                 f64::INFINITY
             };
+        let ghost_grid = frame_interval
+            .is_finite()
+            .then(|| SpiralGrid::new(&refs.exact, GHOST_POINTS_PER_TURN));
         let runner = Self {
             scene,
             milestones: Milestones::new(scene),
@@ -104,6 +109,7 @@ impl<'s> Runner<'s> {
             bang: None,
             max_gap: 0.0,
             max_pen: 0.0,
+            ghost_grid,
             frame_interval,
             next_frame: frame_interval,
         };
@@ -274,15 +280,17 @@ impl<'s> Runner<'s> {
     }
 
     fn frame(&self, t_s: f64, contact_x_m: f64) -> Frame {
-        let (off_coil_m, on_coil_m) = self.model.link_nodes();
         let b = self.scene.tape.thickness_m;
         Frame {
             t_s,
             contact_x_m,
-            off_coil_m,
-            on_coil_m,
+            off_coil_m: self.model.off_coil_nodes(),
+            on_coil: self.model.wound_nodes().unwrap_or_default(),
             eq7: GhostDisc::at(&self.refs.continuum, b, t_s),
-            exact: GhostSpiral::at(&self.refs.exact, b, t_s, GHOST_POINTS_PER_TURN),
+            exact: self
+                .ghost_grid
+                .as_ref()
+                .and_then(|grid| GhostSpiral::at(&self.refs.exact, grid, b, t_s)),
         }
     }
 

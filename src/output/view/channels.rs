@@ -22,7 +22,7 @@ use crate::run::frame::Event;
 /// The channels, registered in one run's context.
 pub struct Channels {
     /// `/scene`.
-    pub scene: Channel<SceneUpdate>,
+    pub scene: Channel<Drawing>,
     /// `/state`.
     pub state: Channel<State>,
     /// `/events`.
@@ -43,6 +43,30 @@ impl Channels {
                 .build(),
             tf: ChannelBuilder::new(TF_TOPIC).context(context).build(),
         }
+    }
+}
+
+/// A scene drawing as a `/scene` message: the SDK's `foxglove.SceneUpdate`, its schema and
+/// its bytes, but encoded into a plain vector and handed to the SDK in one piece. The SDK's
+/// buffer checks its capacity on every put, and a drawing is thousands of small fields: this
+/// way costs a third of the instructions (measured with callgrind on the yoga mat).
+#[derive(Debug, Clone)]
+pub struct Drawing(pub SceneUpdate);
+
+impl Encode for Drawing {
+    type Error = std::convert::Infallible;
+
+    fn get_schema() -> Option<Schema> {
+        SceneUpdate::get_schema()
+    }
+
+    fn get_message_encoding() -> String {
+        SceneUpdate::get_message_encoding()
+    }
+
+    fn encode(&self, buf: &mut impl BufMut) -> Result<(), Self::Error> {
+        buf.put_slice(&self.0.encode_to_vec());
+        Ok(())
     }
 }
 
@@ -90,14 +114,19 @@ impl Encode for State {
     }
 
     fn encode(&self, buf: &mut impl BufMut) -> Result<(), NotFlat> {
-        for (number, (_, value)) in (1u64..).zip(fields(&self.0)?) {
+        // Gathered in a plain vector first and handed over in one piece: the SDK's buffer
+        // checks its capacity on every put, which cost more than the encoding itself.
+        let fields = fields(&self.0)?;
+        let mut bytes = Vec::with_capacity(7 * fields.len());
+        for (number, (_, value)) in (1u64..).zip(fields) {
             let value = value as f32;
             if value != 0.0 {
                 // Wire type 5: 32-bit.
-                prost::encoding::encode_varint(number << 3 | 5, buf);
-                buf.put_f32_le(value);
+                prost::encoding::encode_varint(number << 3 | 5, &mut bytes);
+                bytes.extend_from_slice(&value.to_le_bytes());
             }
         }
+        buf.put_slice(&bytes);
         Ok(())
     }
 }

@@ -4,7 +4,7 @@ use prost::Message as _;
 use prost_reflect::{DescriptorPool, DynamicMessage, Kind, Value};
 
 use super::channels::{EventMessage, State, schema_named};
-use super::paint::{MAX_LINE_POINTS, Thin, drawn};
+use super::paint::{Kept, MAX_LINE_POINTS, drawn, drawn_wound};
 use super::*;
 use crate::model::BangEnd;
 
@@ -113,12 +113,12 @@ fn the_scene_and_tf_channels_carry_the_sdk_schemas() {
 
 #[test]
 fn painted_entities_carry_time_frame_and_lines() {
-    let painter = Painter::new(&scene());
+    let mut painter = Painter::new(&scene());
     let frame = Frame {
         t_s: 1.5,
         contact_x_m: 0.01,
         off_coil_m: vec![[0.0, 0.002], [0.01, 0.002]],
-        on_coil_m: vec![],
+        on_coil: crate::spiral::Placed::default(),
         eq7: None,
         exact: None,
     };
@@ -141,7 +141,7 @@ fn drawing_drops_straight_runs_keeps_bends_and_caps_the_points() {
     // A flat run, a step up, a flat run: 2 + 2 corners survive, nothing else.
     let mut nodes: Vec<[f64; 2]> = (0..100).map(|k| [f64::from(k) * 1e-3, 0.0]).collect();
     nodes.extend((100..200).map(|k| [f64::from(k) * 1e-3, 0.01]));
-    let d = drawn(&nodes, Thin::Straight(1e-4));
+    let d = drawn(&nodes, 1e-4);
     let xy: Vec<(f64, f64)> = d.iter().map(|p| (p.x, p.y)).collect();
     assert_eq!(
         xy,
@@ -155,7 +155,7 @@ fn drawing_drops_straight_runs_keeps_bends_and_caps_the_points() {
             [a.cos(), a.sin()]
         })
         .collect();
-    let d = drawn(&circle, Thin::Curve(0.0));
+    let d = drawn(&circle, 0.0);
     assert!(d.len() <= MAX_LINE_POINTS + 1, "{} points", d.len());
     assert!(d.len() > MAX_LINE_POINTS / 2, "{} points", d.len());
     assert!((d.last().unwrap().x - 1.0).abs() < 1e-9, "the end is kept");
@@ -166,28 +166,41 @@ fn a_crash_leaves_the_completed_chunks_readable() {
     let dir = tempfile::tempdir().unwrap();
     let mut view = ViewObserver::new(dir.path());
     view.observe_init(&scene()).unwrap();
-    // Enough samples for a few 1 MiB chunks (about 30 bytes each).
-    let n = 100_000;
-    for k in 0..n {
-        let t = f64::from(k) * 1e-3;
-        let sample = Sample {
+    // Enough for about four chunks: drawings of a zigzag tape, 1000 nodes that all stay in
+    // the drawing (about 20 kB each, and a /tf message each), and a sample between them.
+    let nodes = 1000;
+    let frame_bytes = 20 * nodes;
+    let frames = 4 * file::CHUNK_SIZE / frame_bytes;
+    let mut n = 0u64;
+    for k in 0..frames {
+        let t = 1e-3 * k as f64;
+        let off_coil_m = (0..nodes)
+            .map(|j| {
+                let x = 1e-3 * j as f64 + t;
+                [x, if j % 2 == 0 { 0.0 } else { 0.01 }]
+            })
+            .collect();
+        let frame = Frame {
+            t_s: t,
+            contact_x_m: t,
+            off_coil_m,
+            on_coil: crate::spiral::Placed::default(),
+            eq7: None,
+            exact: None,
+        };
+        view.observe_frame(&frame).unwrap();
+        view.observe_sample(&Sample {
             t_s: t,
             r_m: t.sin(),
-            x_m: t.cos(),
             ..Sample::default()
-        };
-        // A sample of many distinct values, as a run's are.
-        let sample = Sample {
-            kinetic_j: t.sqrt(),
-            potential_j: t.exp(),
-            ..sample
-        };
-        view.observe_sample(&sample).unwrap();
+        })
+        .unwrap();
+        n += 3;
     }
     // A crash: nothing is flushed or finished, the buffered tail is lost.
     std::mem::forget(view);
     let bytes = fs::read(dir.path().join("run.mcap.partial")).unwrap();
-    let mut read = 0u32;
+    let mut read = 0u64;
     let mut last = None;
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         match m {
@@ -229,4 +242,74 @@ fn the_derived_schema_is_renamed_but_keeps_its_fields() {
         a.file.last().unwrap().message_type[0].field,
         b.file.last().unwrap().message_type[0].field
     );
+}
+
+/// Distance of `p` from the segment from `a` to `b` (m).
+fn distance_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let s = if len2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - s * dx).hypot(p[1] - a[1] - s * dy)
+}
+
+#[test]
+fn a_drawn_spiral_passes_its_nodes_within_tolerance_and_keeps_its_points_as_it_shrinks() {
+    // Ten turns of an Archimedean spiral, 32 nodes a turn, from the centre out, as a wound
+    // coil is drawn; 0.25 of a 1 mm pitch, as the wound tape is.
+    let pitch = 1e-3;
+    let nodes: Vec<[f64; 2]> = (1..=320)
+        .map(|k| {
+            let a = f64::from(k) * 2.0 * std::f64::consts::PI / 32.0;
+            let r = pitch * a / (2.0 * std::f64::consts::PI);
+            [r * a.cos(), r * a.sin()]
+        })
+        .collect();
+    let tol = 0.25 * pitch;
+    let d: Vec<[f64; 2]> = drawn(&nodes, tol).iter().map(|p| [p.x, p.y]).collect();
+    assert!(
+        d.len() < nodes.len() / 2,
+        "{} of {} kept",
+        d.len(),
+        nodes.len()
+    );
+    // Every node lies within the tolerance (and the 1 um rounding) of the drawn line.
+    for p in &nodes {
+        let near = d
+            .windows(2)
+            .map(|w| distance_to_segment(*p, w[0], w[1]))
+            .fold(f64::INFINITY, f64::min);
+        assert!(near <= tol + 2e-6, "{p:?} is {near} m off the drawn line");
+    }
+    // The coil sheds its outer turns: what stays is drawn through the same points, but the
+    // last.
+    for m in [300, 200, 101] {
+        let e: Vec<[f64; 2]> = drawn(&nodes[..m], tol).iter().map(|p| [p.x, p.y]).collect();
+        let same = e.iter().zip(&d).take_while(|(a, b)| a == b).count();
+        assert!(
+            same + 1 >= e.len(),
+            "{m} nodes: {same} of {} as before",
+            e.len()
+        );
+    }
+    // A wound coil's drawing reuses the walk of the drawing before: the same points as a
+    // fresh walk, as the coil sheds, and after a line that is not its continuation.
+    let mut kept = Kept::default();
+    let moved: Vec<[f64; 2]> = nodes.iter().map(|p| [p[0] + 1e-3, p[1]]).collect();
+    for (line, m) in [
+        (&nodes, 320),
+        (&nodes, 300),
+        (&nodes, 101),
+        (&moved, 200),
+        (&nodes, 30),
+    ] {
+        let reused = drawn_wound(&line[..m], tol, &mut kept);
+        let fresh = drawn_wound(&line[..m], tol, &mut Kept::default());
+        assert_eq!(reused, fresh, "{m} nodes");
+        let end = super::paint::point(line[m - 1]);
+        assert_eq!(fresh.last().map(|p| (p.x, p.y)), Some((end.x, end.y)));
+    }
 }
