@@ -1,42 +1,52 @@
 #!/usr/bin/env bash
 # What writing run.mcap costs: runs a scene alternately with and without the MCAP log
 # (--no-mcap), N times each, and prints the median process wall time and CPU time (user +
-# sys) of each, their ratio, the share of the process's wall time spent outside the engine
-# steps (1 - report.json's wall_time_s / the process's), and the size of run.mcap.
-# Usage: tools/mcap_cost.sh [scene] [N]   (default: scenes/yoga-mat.toml 7; needs a release
+# sys, from wait4) of each with their range, their ratio, the share of the process's wall
+# time spent outside the engine steps (1 - report.json's wall_time_s / the process's), and
+# the size of run.mcap. Alternating pairs keep a shared machine's drift out of the ratio;
+# the ratio is also given as the median of the pairs' own ratios.
+# Usage: tools/mcap_cost.sh [scene] [N]   (default: scenes/yoga-mat.toml 15; needs a release
 # build: cargo build --release)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scene=${1:-scenes/yoga-mat.toml}
-n=${2:-7}
+n=${2:-15}
 bin=target/release/uncoil
 [ -x "$bin" ] || cargo build --release
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-for i in $(seq "$n"); do
-  for mode in mcap no-mcap; do
-    flag=()
-    [ "$mode" = no-mcap ] && flag=(--no-mcap)
-    /usr/bin/time -f "$mode %e %U %S" -o "$tmp/one" \
-      "$bin" run "$scene" --out "$tmp/$mode" "${flag[@]}" > /dev/null 2>&1
-    engine=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["wall_time_s"])' "$tmp/$mode/report.json")
-    echo "$(cat "$tmp/one") $engine" >> "$tmp/times"
-  done
-done
-python3 - "$tmp/times" "$tmp/mcap/run.mcap" "$n" <<'PY'
-import os, statistics, sys
-rows = [l.split() for l in open(sys.argv[1]) if l.strip()]
-def med(mode, f):
-    return statistics.median(f(r) for r in rows if r[0] == mode)
-wall = {m: med(m, lambda r: float(r[1])) for m in ("mcap", "no-mcap")}
-cpu = {m: med(m, lambda r: float(r[2]) + float(r[3])) for m in ("mcap", "no-mcap")}
-spread = {m: (min(float(r[1]) for r in rows if r[0] == m), max(float(r[1]) for r in rows if r[0] == m)) for m in wall}
-print(f"runs: {sys.argv[3]} each, alternating")
-for m in ("no-mcap", "mcap"):
-    print(f"{m:>8}: wall median {wall[m]:.3f} s (min {spread[m][0]:.3f}, max {spread[m][1]:.3f}), cpu median {cpu[m]:.3f} s")
-for m in ("no-mcap", "mcap"):
-    share = sorted(1 - float(r[4]) / float(r[1]) for r in rows if r[0] == m)
-    print(f"{m:>8}: outside the engine steps, median {100 * statistics.median(share):.0f} % of the process (min {100 * share[0]:.0f}, max {100 * share[-1]:.0f})")
-print(f"MCAP cost: wall {100 * (wall['mcap'] / wall['no-mcap'] - 1):+.1f} %, cpu {100 * (cpu['mcap'] / cpu['no-mcap'] - 1):+.1f} %")
-print(f"run.mcap: {os.path.getsize(sys.argv[2]) / 1e6:.2f} MB")
+python3 - "$bin" "$scene" "$n" "$tmp" <<'PY'
+import json, os, statistics, subprocess, sys, time
+
+bin, scene, n, tmp = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
+modes = ("no-mcap", "mcap")
+rows = {m: [] for m in modes}
+for _ in range(n):
+    for mode in modes:
+        out = os.path.join(tmp, mode)
+        cmd = [bin, "run", scene, "--out", out] + (["--no-mcap"] if mode == "no-mcap" else [])
+        start = time.perf_counter()
+        p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        _, status, usage = os.wait4(p.pid, 0)
+        wall = time.perf_counter() - start
+        if os.waitstatus_to_exitcode(status) != 0:
+            sys.exit(f"{' '.join(cmd)} failed")
+        engine = json.load(open(os.path.join(out, "report.json")))["wall_time_s"]
+        rows[mode].append((wall, usage.ru_utime + usage.ru_stime, 1 - engine / wall))
+
+def med(mode, k):
+    return statistics.median(r[k] for r in rows[mode])
+
+print(f"{scene}: {n} runs each, alternating")
+for m in modes:
+    walls = [r[0] for r in rows[m]]
+    cpus = [r[1] for r in rows[m]]
+    print(f"{m:>8}: wall median {1e3 * med(m, 0):.1f} ms ({1e3 * min(walls):.1f}-{1e3 * max(walls):.1f}), "
+          f"cpu median {1e3 * med(m, 1):.1f} ms ({1e3 * min(cpus):.1f}-{1e3 * max(cpus):.1f}), "
+          f"outside the engine steps {100 * med(m, 2):.0f} %")
+pairs = [b[0] / a[0] - 1 for a, b in zip(rows["no-mcap"], rows["mcap"])]
+print(f"MCAP cost: wall {100 * (med('mcap', 0) / med('no-mcap', 0) - 1):+.1f} % of medians, "
+      f"{100 * statistics.median(pairs):+.1f} % median of pairs; "
+      f"cpu {100 * (med('mcap', 1) / med('no-mcap', 1) - 1):+.1f} %")
+print(f"run.mcap: {os.path.getsize(os.path.join(tmp, 'mcap', 'run.mcap')) / 1e6:.3f} MB")
 PY
