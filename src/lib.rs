@@ -6,6 +6,7 @@
 //! `house::each_layer_imports_only_the_layers_below_it` in `tests/house.rs`, keeps the rule):
 //!
 //! ```text
+//! 7 python   the Python extension (feature `python`)  `uncoil` in numpy and pandas
 //! 6 study    check, sweep, analysis, plot          many runs, a run's files
 //! 5 output   CSV, JSON, summary, tables, MCAP      observers and what they print
 //! 4 run      the loop, samples, guards, frames     puts the model beside the theory
@@ -24,5 +25,8 @@ pub mod scene;
 pub mod spiral;
 pub mod study;
 pub mod theory;
+
+#[cfg(feature = "python")]
+pub mod python;
 
 pub mod model;

@@ -10,7 +10,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 /// The library's layers, lowest first; a layer may import the layers of a lower rank.
-const LAYERS: [(&str, u32); 7] = [
+const LAYERS: [(&str, u32); 8] = [
     ("scene", 1),
     ("spiral", 2),
     ("theory", 3),
@@ -18,6 +18,7 @@ const LAYERS: [(&str, u32); 7] = [
     ("run", 4),
     ("output", 5),
     ("study", 6),
+    ("python", 7),
 ];
 
 /// The crates only the model may name.

@@ -1,0 +1,191 @@
+//! The Python extension module `uncoil._uncoil` (cargo feature `python`; maturin builds it
+//! from `pyproject.toml`). It loads scenes and runs them for the Python package in
+//! `src/python/uncoil`, which turns what it returns into numpy arrays and dicts. It adds no
+//! physics and no output of its own: a run here is the command line's `uncoil run`, with its
+//! files written only when an output folder is given.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+
+use crate::output::fields::fields;
+use crate::output::view::ViewObserver;
+use crate::output::{CsvObserver, ReportObserver};
+use crate::run::{Observer, RunReport, Sample, run_until};
+use crate::scene::Scene;
+use crate::scene::overrides::{Override, scene_file_with_overrides};
+
+pyo3::create_exception!(
+    _uncoil,
+    SceneError,
+    PyValueError,
+    "A scene file or an override that is not valid: the command line's `key = value: rule`."
+);
+
+/// A validated scene.
+#[pyclass(frozen, name = "Scene", module = "uncoil._uncoil")]
+struct PyScene {
+    inner: Scene,
+}
+
+#[pymethods]
+impl PyScene {
+    /// The scene's name.
+    #[getter]
+    fn name(&self) -> &str {
+        &self.inner.name
+    }
+
+    /// The scene file's text, with one `# override:` line per override.
+    #[getter]
+    fn source_text(&self) -> &str {
+        &self.inner.source_text
+    }
+
+    /// Every value of the scene, defaults filled in, as JSON.
+    fn to_json(&self) -> PyResult<String> {
+        serde_json::to_string(&self.inner).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+    }
+
+    fn __repr__(&self) -> String {
+        format!("Scene({:?})", self.inner.name)
+    }
+}
+
+/// Reads the scene file at `path` and applies `overrides`, each `(key, value)` with the
+/// value in TOML (`("solver.max_dt_s", "0.0005")`), as `uncoil run --set` does.
+#[pyfunction]
+#[pyo3(signature = (path, overrides = Vec::new()))]
+fn load_scene(path: PathBuf, overrides: Vec<(String, String)>) -> PyResult<PyScene> {
+    let overrides = overrides
+        .iter()
+        .map(|(k, v)| format!("{k}={v}").parse::<Override>())
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| SceneError::new_err(e.to_string()))?;
+    scene_file_with_overrides(&path, &overrides)
+        .map(|inner| PyScene { inner })
+        .map_err(|e| SceneError::new_err(e.to_string()))
+}
+
+/// The samples of a run, column by column, in `samples.csv`'s order.
+#[derive(Default)]
+struct Columns {
+    names: Vec<&'static str>,
+    values: Vec<Vec<f64>>,
+}
+
+impl Observer for Columns {
+    fn observe_init(&mut self, _scene: &Scene) -> anyhow::Result<()> {
+        Ok(())
+    }
+
+    fn observe_sample(&mut self, sample: &Sample) -> anyhow::Result<()> {
+        let row = fields(sample)?;
+        if self.names.is_empty() {
+            self.names = row.iter().map(|(name, _)| *name).collect();
+            self.values = vec![Vec::new(); row.len()];
+        }
+        for (column, (_, value)) in self.values.iter_mut().zip(row) {
+            column.push(value);
+        }
+        Ok(())
+    }
+
+    fn observe_final(&mut self, _report: &RunReport) -> anyhow::Result<()> {
+        Ok(())
+    }
+}
+
+/// Runs `scene` and the observers that `out` and `mcap` ask for; stops early once `stop` is
+/// set.
+fn run_scene(
+    scene: &Scene,
+    out: Option<&PathBuf>,
+    mcap: bool,
+    stop: &AtomicBool,
+) -> anyhow::Result<(Columns, RunReport)> {
+    let mut columns = Columns::default();
+    let Some(dir) = out else {
+        let report = run_until(scene, &mut [&mut columns], stop)?;
+        return Ok((columns, report));
+    };
+    std::fs::create_dir_all(dir)?;
+    let mut csv = CsvObserver::new(dir);
+    let mut report = ReportObserver::new(dir);
+    let mut log = ViewObserver::new(dir);
+    let mut observers: Vec<&mut dyn Observer> = vec![&mut columns, &mut csv, &mut report];
+    if mcap {
+        observers.push(&mut log);
+    }
+    let report = run_until(scene, &mut observers, stop)?;
+    Ok((columns, report))
+}
+
+/// A sample column's name and its values as little-endian `float64` bytes.
+type NamedBytes = (String, Py<PyBytes>);
+
+/// Runs `scene` without the GIL: returns the sample columns as `(name, float64 bytes)` pairs
+/// and the report as JSON. Files are written only into `out`, `run.mcap` only with `mcap`.
+/// Ctrl-C stops the run with its files finished and raises `KeyboardInterrupt`.
+#[pyfunction]
+#[pyo3(signature = (scene, out = None, mcap = false))]
+fn run(
+    py: Python<'_>,
+    scene: &PyScene,
+    out: Option<PathBuf>,
+    mcap: bool,
+) -> PyResult<(Vec<NamedBytes>, String)> {
+    if mcap && out.is_none() {
+        return Err(PyValueError::new_err(
+            "mcap=True needs an output folder (out=...)",
+        ));
+    }
+    let stop = AtomicBool::new(false);
+    let (result, interrupted) = std::thread::scope(|s| {
+        let worker = s.spawn(|| run_scene(&scene.inner, out.as_ref(), mcap, &stop));
+        let mut interrupted = None;
+        while !worker.is_finished() {
+            py.detach(|| std::thread::sleep(Duration::from_millis(20)));
+            if interrupted.is_none()
+                && let Err(e) = py.check_signals()
+            {
+                stop.store(true, Ordering::SeqCst);
+                interrupted = Some(e);
+            }
+        }
+        (worker.join(), interrupted)
+    });
+    if let Some(e) = interrupted {
+        return Err(e);
+    }
+    let (columns, report) = result
+        .map_err(|_| PyRuntimeError::new_err("the run panicked"))?
+        .map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))?;
+    let report =
+        serde_json::to_string(&report).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let columns = columns
+        .names
+        .iter()
+        .zip(&columns.values)
+        .map(|(name, values)| {
+            let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+            ((*name).to_owned(), PyBytes::new(py, &bytes).unbind())
+        })
+        .collect();
+    Ok((columns, report))
+}
+
+/// The module `uncoil._uncoil`.
+#[pymodule]
+fn _uncoil(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("SceneError", m.py().get_type::<SceneError>())?;
+    m.add_class::<PyScene>()?;
+    m.add_function(wrap_pyfunction!(load_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

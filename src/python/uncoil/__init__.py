@@ -1,0 +1,115 @@
+"""uncoil from Python: load a scene, run it, get its samples as numpy arrays.
+
+    import uncoil
+    result = uncoil.run("scenes/yoga-mat.toml", overrides={"push.contact_speed_m_s": 0.4})
+    print(result.stop_reason, result.samples["r_m"][-1])
+
+The simulation is the Rust crate's (the extension module `uncoil._uncoil`); this layer only
+turns what it returns into numpy arrays and dicts. A run writes files only when `out` is
+given. It runs without the GIL, and Ctrl-C stops it with its files finished and raises
+`KeyboardInterrupt`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from typing import Any, Dict, List, Mapping, Optional, Union
+
+import numpy as np
+
+from . import _uncoil
+from ._uncoil import Scene, SceneError
+
+__all__ = ["RunResult", "Scene", "SceneError", "load_scene", "run", "__version__"]
+__version__: str = _uncoil.__version__
+
+PathLikeStr = Union[str, "os.PathLike[str]"]
+
+
+def _toml_value(value: Any) -> str:
+    """A Python value as the TOML text `uncoil run --set` takes."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return repr(value)
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    raise TypeError(f"an override must be a number, a bool or a string, not {type(value).__name__}")
+
+
+def load_scene(path: PathLikeStr, overrides: Optional[Mapping[str, Any]] = None) -> Scene:
+    """The scene in the TOML file at `path`, with `overrides` ({"solver.max_dt_s": 5e-4})
+    applied as `uncoil run --set` applies them.
+
+    Raises `SceneError` with the command line's message when the scene is not valid.
+    """
+    pairs = [(key, _toml_value(value)) for key, value in (overrides or {}).items()]
+    return _uncoil.load_scene(os.fspath(path), pairs)
+
+
+class RunResult:
+    """What a run gives: its samples by column, its report, and the report's main parts."""
+
+    samples: Dict[str, np.ndarray]
+    """Every column of `samples.csv`, as float64 arrays (NaN where the CSV cell is empty)."""
+    report: Dict[str, Any]
+    """`report.json` as a dict."""
+
+    def __init__(self, samples: Dict[str, np.ndarray], report: Dict[str, Any]) -> None:
+        self.samples = samples
+        self.report = report
+
+    @property
+    def stop_reason(self) -> str:
+        """Why the run stopped: `at-rest`, `bang-cap`, `max-time`, `interrupted`, or a guard."""
+        return str(self.report["stop"]["reason"])
+
+    @property
+    def ledger(self) -> Dict[str, Any]:
+        """The energy ledger (J): where the energy went."""
+        return dict(self.report["ledger"])
+
+    @property
+    def milestones(self) -> List[Dict[str, Any]]:
+        """The coil's milestones: radii reached, with the simulation's and the references' times."""
+        return list(self.report["milestones"])
+
+    def to_pandas(self) -> Any:
+        """The samples as a pandas DataFrame (needs pandas)."""
+        import pandas as pd
+
+        return pd.DataFrame(self.samples)
+
+    def __repr__(self) -> str:
+        n = len(next(iter(self.samples.values()), []))
+        return f"RunResult({self.report['scene']['name']!r}: {n} samples, stopped {self.stop_reason})"
+
+
+def run(
+    scene_or_path: Union[Scene, PathLikeStr],
+    overrides: Optional[Mapping[str, Any]] = None,
+    out: Optional[PathLikeStr] = None,
+    mcap: bool = False,
+) -> RunResult:
+    """Runs a scene (a `Scene`, or the path of a scene file with `overrides`).
+
+    Files (`samples.csv`, `report.json`, and `run.mcap` with `mcap=True`) are written only
+    into `out`.
+    """
+    if isinstance(scene_or_path, Scene):
+        if overrides:
+            raise ValueError("overrides go with a scene path; load_scene applies them to a Scene")
+        scene = scene_or_path
+    else:
+        scene = load_scene(scene_or_path, overrides)
+    columns, report = _uncoil.run(scene, None if out is None else os.fspath(out), mcap)
+    samples = {name: np.frombuffer(data, dtype="<f8") for name, data in columns}
+    return RunResult(samples, json.loads(report))

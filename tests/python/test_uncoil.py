@@ -1,0 +1,129 @@
+"""The Python package as a user meets it: installed from a wheel into a fresh virtual
+environment (`.ci/run`), run from another folder.
+
+    python3 -m venv /tmp/venv && /tmp/venv/bin/pip install '.[test]'
+    /tmp/venv/bin/python -m pytest tests/python
+"""
+
+import csv
+import json
+import math
+import os
+import pathlib
+import signal
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import uncoil
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+YOGA = ROOT / "scenes" / "yoga-mat.toml"
+THIN = ROOT / "scenes" / "thin-tape.toml"
+
+
+@pytest.fixture(scope="module")
+def yoga(tmp_path_factory):
+    """The yoga mat, run once with its files written."""
+    out = tmp_path_factory.mktemp("yoga")
+    return uncoil.run(YOGA, out=out), out
+
+
+def test_samples_are_the_csv_columns_as_float_arrays(yoga):
+    result, out = yoga
+    with open(out / "samples.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    header, body = rows[0], rows[1:]
+    assert list(result.samples) == header
+    for k, name in enumerate(header):
+        column = result.samples[name]
+        assert column.dtype == np.float64 and column.shape == (len(body),), name
+        # The CSV keeps 10 significant digits; an empty cell is a NaN.
+        cells = np.array([float(r[k]) if r[k] else math.nan for r in body])
+        assert np.allclose(column, cells, rtol=1e-9, atol=0, equal_nan=True), name
+
+
+def test_report_ledger_milestones_and_stop_reason(yoga):
+    result, out = yoga
+    on_disk = json.loads((out / "report.json").read_text())
+    assert result.report["links"] == on_disk["links"] > 0
+    assert result.report["sim_time_s"] == on_disk["sim_time_s"]
+    assert result.stop_reason == "at-rest"
+    assert result.ledger["mgr_j"] > 0
+    labels = [m["label"] for m in result.milestones]
+    assert "0.75R" in labels
+    # r(t) falls from R to the bang radius.
+    r = result.samples["r_m"]
+    assert r[0] == pytest.approx(0.06, rel=1e-3) and r[-1] < 0.006
+
+
+def test_to_pandas_is_the_samples_frame(yoga):
+    pd = pytest.importorskip("pandas")
+    frame = yoga[0].to_pandas()
+    assert isinstance(frame, pd.DataFrame)
+    assert list(frame.columns) == list(yoga[0].samples)
+    assert frame["t_s"].iloc[-1] == yoga[0].samples["t_s"][-1]
+
+
+def test_a_run_without_out_writes_nothing(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = uncoil.run(YOGA, overrides={"push.contact_speed_m_s": 0.4})
+    assert result.report["scene"]["push"]["contact_speed_m_s"] == 0.4
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(ValueError, match="out="):
+        uncoil.run(YOGA, mcap=True)
+
+
+def test_mcap_is_written_only_when_asked(tmp_path):
+    uncoil.run(YOGA, out=tmp_path / "plain")
+    assert not (tmp_path / "plain" / "run.mcap").exists()
+    uncoil.run(YOGA, out=tmp_path / "log", mcap=True)
+    assert (tmp_path / "log" / "run.mcap").stat().st_size > 0
+
+
+def test_a_bad_scene_raises_scene_error_with_the_command_lines_text(tmp_path):
+    with pytest.raises(uncoil.SceneError) as caught:
+        uncoil.load_scene(YOGA, {"tape.thickness_m": -1})
+    message = str(caught.value)
+    assert message.startswith("tape.thickness_m = -1: must be > 0")
+    binary = next(
+        (p for p in (ROOT / "target" / d / "uncoil" for d in ("debug", "release")) if p.exists()),
+        None,
+    )
+    if binary is None:
+        pytest.skip("no uncoil binary built to compare with")
+    cli = subprocess.run(
+        [str(binary), "run", str(YOGA), "--set", "tape.thickness_m=-1", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+    )
+    assert cli.returncode == 2
+    assert cli.stderr.strip() == f"error: {message}"
+
+
+def test_a_scene_object_runs_and_rejects_overrides():
+    scene = uncoil.load_scene(YOGA, {"discretisation.links_per_turn": 16})
+    assert scene.name == "yoga-mat"
+    assert "# override: discretisation.links_per_turn = 16" in scene.source_text
+    assert json.loads(scene.to_json())["discretisation"]["links_per_turn"] == 16
+    with pytest.raises(ValueError):
+        uncoil.run(scene, overrides={"push.contact_speed_m_s": 0.4})
+
+
+def test_ctrl_c_stops_the_run_with_its_files_and_raises_keyboard_interrupt(tmp_path):
+    # The thin tape runs for most of a minute; a SIGINT 0.5 s in must end it within seconds.
+    # The timer's thread can only fire while the run has let go of the GIL.
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
+    start = time.monotonic()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        uncoil.run(THIN, out=tmp_path)
+    elapsed = time.monotonic() - start
+    timer.join()
+    assert elapsed < 10, f"stopped after {elapsed:.1f} s"
+    report = json.loads((tmp_path / "report.json").read_text())
+    assert report["stop"]["reason"] == "interrupted"
+    assert (tmp_path / "samples.csv").stat().st_size > 0
