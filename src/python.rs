@@ -179,6 +179,33 @@ fn run(
     Ok((columns, report))
 }
 
+/// A reference of the continuum theory or of the exact-geometry model for `scene`, at each
+/// of `at` (radii in m, or laid fractions), `NaN` where it is not defined:
+/// - `eq7_time_at_radius`: eq. (7) with the corrected energy integral (ERRATA A1-A3), from
+///   the scene's push (s);
+/// - `eq7_time_from_rest`: its closed form from rest, `2 pi sqrt(R^3 - r^3) / (b sqrt(3 g))`
+///   (s);
+/// - `eq17_time_at_radius`: eq. (17)'s closed form (ERRATA C2) (s);
+/// - `exact_time_at_fraction`, `exact_speed_at_fraction`: the exact-geometry model's time (s)
+///   and contact-line speed (m/s) at a laid mass fraction.
+#[pyfunction]
+fn theory(scene: &PyScene, quantity: &str, at: Vec<f64>) -> PyResult<Vec<f64>> {
+    use crate::theory::{References, continuum::continuum_time_from_rest, params};
+    let refs = References::new(&scene.inner);
+    let p = params(&scene.inner);
+    let value = |x: f64| -> PyResult<f64> {
+        Ok(match quantity {
+            "eq7_time_at_radius" => refs.continuum.time_at_radius(x).unwrap_or(f64::NAN),
+            "eq7_time_from_rest" => continuum_time_from_rest(&p, x),
+            "eq17_time_at_radius" => refs.force_torque.time_at_radius(x),
+            "exact_time_at_fraction" => refs.exact.time_at_fraction(x).unwrap_or(f64::NAN),
+            "exact_speed_at_fraction" => refs.exact.xdot_at_psi(refs.exact.psi_at_fraction(x)),
+            other => return Err(PyValueError::new_err(format!("no quantity {other:?}"))),
+        })
+    };
+    at.into_iter().map(value).collect()
+}
+
 /// The module `uncoil._uncoil`.
 #[pymodule]
 fn _uncoil(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -186,6 +213,7 @@ fn _uncoil(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyScene>()?;
     m.add_function(wrap_pyfunction!(load_scene, m)?)?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(theory, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -127,3 +127,37 @@ def test_ctrl_c_stops_the_run_with_its_files_and_raises_keyboard_interrupt(tmp_p
     report = json.loads((tmp_path / "report.json").read_text())
     assert report["stop"]["reason"] == "interrupted"
     assert (tmp_path / "samples.csv").stat().st_size > 0
+
+
+def test_theory_gives_the_references_the_run_compared_itself_with(yoga):
+    result, _ = yoga
+    scene = uncoil.load_scene(YOGA)
+    milestones = result.milestones
+    r = np.array([m["r_m"] for m in milestones])
+    f = np.array([m["laid_fraction"] for m in milestones])
+    for name, got in [
+        ("t_eq7_s", uncoil.theory.eq7_time_at_radius(scene, r)),
+        ("t_eq17_s", uncoil.theory.eq17_time_at_radius(scene, r)),
+        ("t_geo_s", uncoil.theory.exact_time_at_fraction(scene, f)),
+    ]:
+        want = np.array([m[name] for m in milestones])
+        assert np.allclose(got, want, rtol=1e-12, atol=0), name
+    # The exact model's speed against the run's approach curve, [r, x'] at f = 1 - (r/R)^2.
+    curve = np.array(result.report["approach"]["exact_curve"])
+    big_r = result.report["scene"]["tape"]["outer_radius_m"]
+    speed = uncoil.theory.exact_speed_at_fraction(scene, 1 - (curve[:, 0] / big_r) ** 2)
+    assert np.allclose(speed, curve[:, 1], rtol=1e-12, atol=0)
+    # A scalar gives a float; past the end, NaN.
+    assert isinstance(uncoil.theory.eq7_time_at_radius(scene, 0.03), float)
+    assert math.isnan(uncoil.theory.exact_time_at_fraction(scene, 2.0))
+
+
+def test_eq7_from_rest_is_the_limit_of_a_gentle_push():
+    # Pushed at 1 mm/s the coil is nearly at rest: eq. (7) from the push approaches the
+    # closed form from rest, which drops terms of order b/r from the energy integral; they
+    # make 0.11-0.17 % here.
+    scene = uncoil.load_scene(YOGA, {"push.contact_speed_m_s": 0.001})
+    r = np.array([0.05, 0.04, 0.03])
+    numeric = uncoil.theory.eq7_time_at_radius(scene, r)
+    closed = uncoil.theory.eq7_time_from_rest(scene, r)
+    assert np.all(np.abs(numeric / closed - 1) < 0.005), numeric / closed

@@ -19,10 +19,10 @@ from typing import Any, Dict, List, Mapping, Optional, Union
 
 import numpy as np
 
-from . import _uncoil
+from . import _uncoil, theory
 from ._uncoil import Scene, SceneError
 
-__all__ = ["RunResult", "Scene", "SceneError", "load_scene", "run", "__version__"]
+__all__ = ["RunResult", "Scene", "SceneError", "load_scene", "run", "theory", "__version__"]
 __version__: str = _uncoil.__version__
 
 PathLikeStr = Union[str, "os.PathLike[str]"]
