@@ -5,7 +5,7 @@
 //! files written only when an output folder is given.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -145,26 +145,9 @@ fn run(
         ));
     }
     let stop = AtomicBool::new(false);
-    let (result, interrupted) = std::thread::scope(|s| {
-        let worker = s.spawn(|| run_scene(&scene.inner, out.as_ref(), mcap, &stop));
-        let mut interrupted = None;
-        while !worker.is_finished() {
-            py.detach(|| std::thread::sleep(Duration::from_millis(20)));
-            if interrupted.is_none()
-                && let Err(e) = py.check_signals()
-            {
-                stop.store(true, Ordering::SeqCst);
-                interrupted = Some(e);
-            }
-        }
-        (worker.join(), interrupted)
-    });
-    if let Some(e) = interrupted {
-        return Err(e);
-    }
-    let (columns, report) = result
-        .map_err(|_| PyRuntimeError::new_err("the run panicked"))?
-        .map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))?;
+    let (columns, report) = without_gil(py, &stop, || {
+        run_scene(&scene.inner, out.as_ref(), mcap, &stop)
+    })?;
     let report =
         serde_json::to_string(&report).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     let columns = columns
@@ -206,6 +189,88 @@ fn theory(scene: &PyScene, quantity: &str, at: Vec<f64>) -> PyResult<Vec<f64>> {
     at.into_iter().map(value).collect()
 }
 
+/// Runs `f` on its own thread with the GIL released, polling for Ctrl-C: on one it sets
+/// `stop`, waits for `f` to wind down and returns the `KeyboardInterrupt`.
+fn without_gil<T: Send>(
+    py: Python<'_>,
+    stop: &AtomicBool,
+    f: impl FnOnce() -> anyhow::Result<T> + Send,
+) -> PyResult<T> {
+    let (result, interrupted) = std::thread::scope(|s| {
+        let worker = s.spawn(f);
+        let mut interrupted = None;
+        while !worker.is_finished() {
+            py.detach(|| std::thread::sleep(Duration::from_millis(20)));
+            if interrupted.is_none()
+                && let Err(e) = py.check_signals()
+            {
+                stop.store(true, Ordering::SeqCst);
+                interrupted = Some(e);
+            }
+        }
+        (worker.join(), interrupted)
+    });
+    if let Some(e) = interrupted {
+        return Err(e);
+    }
+    result
+        .map_err(|_| PyRuntimeError::new_err("the run panicked"))?
+        .map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))
+}
+
+/// A folder of this process's own under the system's temporary folder, for a sweep that
+/// writes no files of the user's.
+fn temporary_folder() -> PathBuf {
+    static NEXT: AtomicU64 = AtomicU64::new(0);
+    let n = NEXT.fetch_add(1, Ordering::SeqCst);
+    std::env::temp_dir().join(format!("uncoil-sweep-{}-{n}", std::process::id()))
+}
+
+/// A sweep of `scene` over the product grid of `vary` (`(key, [TOML values])`, the last
+/// varying fastest), `jobs` runs at once (default one per core), written into `out` or a
+/// temporary folder: `sweep.csv`'s header and rows (in the grid's order), as text.
+#[pyfunction]
+#[pyo3(signature = (scene, vary, jobs = None, out = None))]
+fn sweep(
+    py: Python<'_>,
+    scene: &PyScene,
+    vary: Vec<(String, Vec<String>)>,
+    jobs: Option<usize>,
+    out: Option<PathBuf>,
+) -> PyResult<(Vec<String>, Vec<Vec<String>>)> {
+    use crate::study::sweep::{Sweep, SweepOptions, SweepTable, Vary};
+    let varies = vary
+        .iter()
+        .map(|(key, values)| format!("{key}={}", values.join(",")).parse::<Vary>())
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| SceneError::new_err(e.to_string()))?;
+    let grid = Sweep::new(&scene.inner.source_text, &scene.inner.name, &varies)
+        .map_err(|e| SceneError::new_err(e.to_string()))?;
+    let (dir, temporary) = match out {
+        Some(dir) => (dir, false),
+        None => (temporary_folder(), true),
+    };
+    let opts = SweepOptions {
+        jobs,
+        progress: false,
+        ..SweepOptions::default()
+    };
+    let stop = std::sync::Arc::clone(&opts.stop);
+    let result = without_gil(py, &stop, || {
+        let outcome = grid.run(&dir, &opts)?;
+        SweepTable::read(&outcome.path)
+    });
+    if temporary {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    let mut table = result?;
+    // Rows are written as runs end; give them in the grid's order.
+    table
+        .rows
+        .sort_by_key(|row| row.first().and_then(|i| i.parse::<usize>().ok()));
+    Ok((table.header, table.rows))
+}
+
 /// The module `uncoil._uncoil`.
 #[pymodule]
 fn _uncoil(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -214,6 +279,7 @@ fn _uncoil(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(load_scene, m)?)?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(theory, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

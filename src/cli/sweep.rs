@@ -158,6 +158,7 @@ pub fn sweep(args: SweepArgs) -> ExitCode {
         shard: args.shard.unwrap_or(Shard::ALL),
         jobs: args.jobs,
         progress: !args.quiet,
+        ..SweepOptions::default()
     };
     eprintln!(
         "sweeping {} ({} combinations{}) into {} ...",

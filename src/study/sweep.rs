@@ -17,7 +17,8 @@ use std::fs::File;
 use std::io::{IsTerminal, Write};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use anyhow::Context as _;
@@ -31,7 +32,7 @@ pub use self::table::{SweepTable, csv_line, merge, write_merged};
 
 use self::grid::settings;
 use self::row::one_line;
-use crate::run::{RunReport, milestone_radii, run};
+use crate::run::{RunReport, milestone_radii, run_until};
 use crate::scene::Scene;
 
 /// What a sweep did.
@@ -58,6 +59,9 @@ pub struct SweepOptions {
     pub jobs: Option<usize>,
     /// A progress bar on stderr if it is a terminal, else one line per finished run.
     pub progress: bool,
+    /// Once set, runs that have not started are skipped and running ones stop (status
+    /// `interrupted`).
+    pub stop: Arc<AtomicBool>,
 }
 
 impl Default for SweepOptions {
@@ -66,6 +70,7 @@ impl Default for SweepOptions {
             shard: Shard::ALL,
             jobs: None,
             progress: true,
+            stop: Arc::new(AtomicBool::new(false)),
         }
     }
 }
@@ -128,6 +133,7 @@ impl Sweep {
             done: Mutex::new(0),
             failed: Mutex::new(0),
             stopped: Mutex::new(0),
+            stop: &opts.stop,
         };
         let result: anyhow::Result<()> =
             pool.install(|| mine.par_iter().try_for_each(|&i| runner.run_one(i)));
@@ -185,15 +191,19 @@ struct Runner<'a> {
     done: Mutex<usize>,
     failed: Mutex<usize>,
     stopped: Mutex<usize>,
+    stop: &'a AtomicBool,
 }
 
 impl Runner<'_> {
     /// Runs combination `i`, appends its row and reports it.
     fn run_one(&self, i: usize) -> anyhow::Result<()> {
+        if self.stop.load(Ordering::SeqCst) {
+            return Ok(());
+        }
         let combo = &self.sweep.combos[i];
         let scene = &self.sweep.scenes[i];
         let started = Instant::now();
-        let outcome = catch_unwind(AssertUnwindSafe(|| run(scene, &mut [])));
+        let outcome = catch_unwind(AssertUnwindSafe(|| run_until(scene, &mut [], self.stop)));
         let result = match outcome {
             Ok(Ok(report)) => Ok(report),
             Ok(Err(e)) => Err(format!("{e:#}")),

@@ -161,3 +161,21 @@ def test_eq7_from_rest_is_the_limit_of_a_gentle_push():
     numeric = uncoil.theory.eq7_time_at_radius(scene, r)
     closed = uncoil.theory.eq7_time_from_rest(scene, r)
     assert np.all(np.abs(numeric / closed - 1) < 0.005), numeric / closed
+
+
+def test_sweep_gives_the_table_as_columns_and_writes_only_into_out(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    table = uncoil.sweep(
+        YOGA, vary={"discretisation.links_per_turn": [8, 16], "stop.bang_cap_s": 0}, jobs=1
+    )
+    assert list(tmp_path.iterdir()) == []
+    assert list(table["discretisation.links_per_turn"]) == [8.0, 16.0]
+    assert table["status"] == ["ok", "ok"]
+    assert table["links"].dtype == np.float64 and np.all(table["links"] > 0)
+    # The same runs as uncoil.run's, row by row.
+    for k, n in enumerate([8, 16]):
+        one = uncoil.run(YOGA, {"discretisation.links_per_turn": n, "stop.bang_cap_s": 0})
+        assert table["links"][k] == one.report["links"]
+        assert table["sim_time_s"][k] == pytest.approx(one.report["sim_time_s"], rel=1e-6)
+    written = uncoil.sweep(YOGA, vary={"discretisation.links_per_turn": [8]}, out=tmp_path / "s")
+    assert (tmp_path / "s" / "sweep.csv").exists() and written["status"] == ["ok"]

@@ -22,7 +22,16 @@ import numpy as np
 from . import _uncoil, theory
 from ._uncoil import Scene, SceneError
 
-__all__ = ["RunResult", "Scene", "SceneError", "load_scene", "run", "theory", "__version__"]
+__all__ = [
+    "RunResult",
+    "Scene",
+    "SceneError",
+    "load_scene",
+    "run",
+    "sweep",
+    "theory",
+    "__version__",
+]
 __version__: str = _uncoil.__version__
 
 PathLikeStr = Union[str, "os.PathLike[str]"]
@@ -113,3 +122,32 @@ def run(
     columns, report = _uncoil.run(scene, None if out is None else os.fspath(out), mcap)
     samples = {name: np.frombuffer(data, dtype="<f8") for name, data in columns}
     return RunResult(samples, json.loads(report))
+
+
+def _column(cells: List[str]) -> Union[np.ndarray, List[str]]:
+    """A sweep column: float64 (NaN for an empty cell) if every cell is a number, else text."""
+    try:
+        return np.array([float(c) if c else math.nan for c in cells], dtype=np.float64)
+    except ValueError:
+        return list(cells)
+
+
+def sweep(
+    scene: Union[Scene, PathLikeStr],
+    vary: Mapping[str, Any],
+    jobs: Optional[int] = None,
+    out: Optional[PathLikeStr] = None,
+) -> Dict[str, Union[np.ndarray, List[str]]]:
+    """Runs `scene` over the product grid of `vary` ({"discretisation.links_per_turn": [16, 32]},
+    the last key varying fastest), `jobs` runs at once (default one per core), as
+    `uncoil sweep` does, and gives `sweep.csv` by column: numbers as float64 arrays, the
+    status as text. Files are written only into `out`.
+    """
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
+    pairs = []
+    for key, values in vary.items():
+        values = [values] if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__") else values
+        pairs.append((key, [_toml_value(v) for v in values]))
+    header, rows = _uncoil.sweep(scene, pairs, jobs, None if out is None else os.fspath(out))
+    return {name: _column([row[k] for row in rows]) for k, name in enumerate(header)}

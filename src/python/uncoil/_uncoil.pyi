@@ -22,3 +22,9 @@ def run(
     scene: Scene, out: Optional[Union[str, PathLike[str]]] = None, mcap: bool = False
 ) -> Tuple[List[Tuple[str, bytes]], str]: ...
 def theory(scene: Scene, quantity: str, at: List[float]) -> List[float]: ...
+def sweep(
+    scene: Scene,
+    vary: List[Tuple[str, List[str]]],
+    jobs: Optional[int] = None,
+    out: Optional[Union[str, PathLike[str]]] = None,
+) -> Tuple[List[str], List[List[str]]]: ...
