@@ -179,3 +179,18 @@ def test_sweep_gives_the_table_as_columns_and_writes_only_into_out(tmp_path, mon
         assert table["sim_time_s"][k] == pytest.approx(one.report["sim_time_s"], rel=1e-6)
     written = uncoil.sweep(YOGA, vary={"discretisation.links_per_turn": [8]}, out=tmp_path / "s")
     assert (tmp_path / "s" / "sweep.csv").exists() and written["status"] == ["ok"]
+
+
+def test_ctrl_c_stops_a_sweep(tmp_path):
+    # Two thin-tape runs take minutes; a SIGINT 0.5 s in must end the sweep within seconds,
+    # the running run's row saying so.
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
+    start = time.monotonic()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        uncoil.sweep(THIN, vary={"push.contact_speed_m_s": [0.1, 0.11]}, jobs=1, out=tmp_path)
+    elapsed = time.monotonic() - start
+    timer.join()
+    assert elapsed < 10, f"stopped after {elapsed:.1f} s"
+    rows = list(csv.DictReader(open(tmp_path / "sweep.csv", newline="")))
+    assert [r["status"] for r in rows] == ["interrupted"]
