@@ -1,7 +1,7 @@
 //! Parameter sweeps: the product grid of `--vary KEY=V1,V2,...` over a scene, run in
 //! parallel (rayon), one row per finished run appended and flushed to `sweep.csv`, shards
 //! (`K/N`) for batch schedulers and the merge of shard files. It does no physics and draws
-//! nothing: each run is [`run`] on a scene built by
+//! nothing: each run is [`run_until`] (with the sweep's stop flag) on a scene built by
 //! [`scene_with_overrides`](crate::scene::overrides::scene_with_overrides); reports are in
 //! [`analysis`](crate::study::analysis) and [`plot`](crate::study::plot).
 //!
