@@ -116,10 +116,10 @@ fn run_scene(
     std::fs::create_dir_all(dir)?;
     let mut csv = CsvObserver::new(dir);
     let mut report = ReportObserver::new(dir);
-    let mut log = ViewObserver::new(dir);
+    let mut log = mcap.then(|| ViewObserver::new(dir));
     let mut observers: Vec<&mut dyn Observer> = vec![&mut columns, &mut csv, &mut report];
-    if mcap {
-        observers.push(&mut log);
+    if let Some(log) = log.as_mut() {
+        observers.push(log);
     }
     let report = run_until(scene, &mut observers, stop)?;
     Ok((columns, report))

@@ -94,18 +94,23 @@ pub(super) const MAX_LINE_POINTS: usize = 2048;
 /// steps run from the first node, so a line that only grows or shrinks at its far end keeps
 /// its drawn points, and a log repeats their bytes.
 pub(super) fn drawn(nodes: &[[f64; 2]], tol_m: f64) -> Vec<Point3> {
-    let kept: Vec<[f64; 2]> = nodes
-        .iter()
-        .zip(sleeve(nodes, tol_m))
-        .filter(|(_, k)| *k)
-        .map(|(p, _)| *p)
-        .collect();
+    let kept = kept_nodes(nodes, &sleeve(nodes, tol_m));
     let step = kept.len().div_ceil(MAX_LINE_POINTS).max(1);
     let last = kept.len().saturating_sub(1);
     kept.iter()
         .enumerate()
         .filter(|(i, _)| i % step == 0 || *i == last)
         .map(|(_, &p)| point(p))
+        .collect()
+}
+
+/// The nodes whose `keep` is set.
+fn kept_nodes(nodes: &[[f64; 2]], keep: &[bool]) -> Vec<[f64; 2]> {
+    nodes
+        .iter()
+        .zip(keep)
+        .filter(|(_, k)| **k)
+        .map(|(p, _)| *p)
         .collect()
 }
 
@@ -119,13 +124,7 @@ pub(super) const MAX_WOUND_POINTS: usize = 1024;
 /// [`sleeve`] keeps within `tol_m`, at most the outermost [`MAX_WOUND_POINTS`] of them. As the
 /// coil sheds its outer end, the drawing is the same run of kept points, shifted.
 pub(super) fn drawn_wound(nodes: &[[f64; 2]], tol_m: f64, kept: &mut Kept) -> Vec<Point3> {
-    let keep = kept.of(nodes, tol_m);
-    let kept: Vec<[f64; 2]> = nodes
-        .iter()
-        .zip(keep)
-        .filter(|(_, k)| **k)
-        .map(|(p, _)| *p)
-        .collect();
+    let kept = kept_nodes(nodes, kept.of(nodes, tol_m));
     let from = kept.len().saturating_sub(MAX_WOUND_POINTS);
     kept[from..].iter().map(|&p| point(p)).collect()
 }
