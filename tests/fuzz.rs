@@ -120,6 +120,7 @@ fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
     prop_assert!(s.stop.rest_fraction > 0.0 && s.stop.rest_fraction < 1.0);
     prop_assert!(s.solver.bang_piece_m >= 0.0);
     prop_assert!((1..=1000).contains(&s.solver.bang_iterations));
+    prop_assert!((1..=1000).contains(&s.solver.bang_relax_iterations));
     prop_assert!(s.solver.bang_step_rad >= MIN_BANG_STEP_RAD && s.solver.bang_step_rad <= 1.0);
     prop_assert!(s.solver.contact_hz > 0.0 && s.solver.joint_hz > 0.0);
     prop_assert!(s.solver.bang_joint_hz > 0.0 && s.output.scene_rate_hz >= 0.0);

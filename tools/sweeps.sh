@@ -18,6 +18,8 @@
 #   bang-links    yoga mat's final bang against the resolution (links per turn)
 #   bang-step     ... against its step (solver.bang_step_rad)
 #   bang-iter     ... against its solver iterations (solver.bang_iterations)
+#   bang-substeps ... its substeps (24, 48, 96) against its step (0.15, 0.075, 0.0375 rad)
+#   bang-relax    ... its relax sweeps per substep (1, 2, 4) against its step
 #   bang-piece    ... against the length of its pieces (solver.bang_piece_m)
 #   bang-turns    ... released with one turn left (r = b, the shipped scene) or two (r = 2b)
 #                 (each setting an ensemble of 8 pushes, 0.300-0.307 m/s: the bang is chaotic)
@@ -126,6 +128,14 @@ run_study() {
   bang-iter)
     study bang-iter $yoga "${pushes[@]}" --vary solver.bang_iterations=6,12,24,48 \
       -- --title "yoga mat, final bang, solver iterations" "${bang_report[@]}" ;;
+  bang-substeps)
+    study bang-substeps $yoga "${pushes[@]}" --vary solver.bang_iterations=24,48,96 \
+      --vary solver.bang_step_rad=0.15,0.075,0.0375 \
+      -- --title "yoga mat, final bang, substeps and step" "${bang_report[@]}" ;;
+  bang-relax)
+    study bang-relax $yoga "${pushes[@]}" --vary solver.bang_relax_iterations=1,2,4 \
+      --vary solver.bang_step_rad=0.15,0.0375 \
+      -- --title "yoga mat, final bang, relax sweeps and step" "${bang_report[@]}" ;;
   bang-piece)
     study bang-piece $yoga "${pushes[@]}" \
       --vary solver.bang_piece_m=0.01,0.005,0.0025,0.00125 \
@@ -160,6 +170,6 @@ run_study() {
 }
 
 all=(yoga-pareto yoga-links yoga-dt yoga-rule yoga-rule-fine yoga-iter thin-pareto scaling
-     bang-links bang-step bang-iter bang-piece bang-turns bang-thin-piece bang-thin-iter approach
+     bang-links bang-step bang-iter bang-substeps bang-relax bang-piece bang-turns bang-thin-piece bang-thin-iter approach
      yoga-run)
 for s in "${@:-${all[@]}}"; do run_study "$s"; done

@@ -282,6 +282,7 @@ impl Model {
                 _ => {
                     self.ledger.bang_j += kinetic;
                     self.bang.ledger.freeze_j += kinetic;
+                    self.close_pin_gap();
                 }
             }
         }

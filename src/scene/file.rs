@@ -29,6 +29,7 @@ pub const SCENE_KEYS: &[&str] = &[
     "solver.freeze_speed_m_s",
     "solver.bang_step_rad",
     "solver.bang_iterations",
+    "solver.bang_relax_iterations",
     "solver.bang_piece_m",
     "solver.contact_hz",
     "solver.joint_hz",
@@ -71,6 +72,8 @@ const DEFAULT_BANG_JOINT_HZ: f64 = 1.0e9;
 const DEFAULT_MAX_TIME_S: f64 = 60.0;
 /// Default `solver.bang_iterations`.
 const DEFAULT_BANG_ITERATIONS: i64 = 24;
+/// Default `solver.bang_relax_iterations`: the engine's own.
+const DEFAULT_BANG_RELAX_ITERATIONS: i64 = 1;
 /// Default `stop.bang_cap_s`.
 const DEFAULT_BANG_CAP_S: f64 = 2.0;
 /// Default `stop.rest_fraction`.
@@ -186,6 +189,7 @@ pub(super) struct SolverFile {
     pub(super) freeze_speed_m_s: f64,
     pub(super) bang_step_rad: f64,
     pub(super) bang_iterations: i64,
+    pub(super) bang_relax_iterations: i64,
     /// `None` means "the tape's thickness" (see [`crate::scene::Solver::bang_piece_m`]).
     pub(super) bang_piece_m: Option<f64>,
     pub(super) contact_hz: f64,
@@ -202,6 +206,7 @@ impl Default for SolverFile {
             freeze_speed_m_s: DEFAULT_FREEZE_SPEED_M_S,
             bang_step_rad: DEFAULT_BANG_STEP_RAD,
             bang_iterations: DEFAULT_BANG_ITERATIONS,
+            bang_relax_iterations: DEFAULT_BANG_RELAX_ITERATIONS,
             bang_piece_m: None,
             contact_hz: DEFAULT_CONTACT_HZ,
             joint_hz: DEFAULT_JOINT_HZ,
@@ -419,6 +424,7 @@ mod tests {
                 "solver.steps_per_link" | "solver.iterations" => "4",
                 "solver.bang_step_rad" => "0.15",
                 "solver.bang_iterations" => "24",
+                "solver.bang_relax_iterations" => "1",
                 "solver.bang_piece_m" => "0.005",
                 "solver.contact_hz" => "1e4",
                 "solver.joint_hz" => "1e7",
