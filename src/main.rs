@@ -18,12 +18,16 @@ use anyhow::Context as _;
 use clap::{Parser, Subcommand};
 
 use uncoil::output::compare::{SampleLog, table};
+use uncoil::output::folded::{chain_summary, write_chain_run};
 use uncoil::output::view::ViewObserver;
 use uncoil::output::{CsvObserver, ReportObserver, summary};
+use uncoil::run::folded::ChainEnd;
 use uncoil::run::stop::{Status, StopReason};
 use uncoil::run::{Observer, run, run_until};
+use uncoil::scene::AnyScene;
 use uncoil::scene::Scene;
-use uncoil::scene::overrides::{Override, scene_file_with_overrides};
+use uncoil::scene::folded::FoldedChain;
+use uncoil::scene::overrides::{Override, any_scene_file_with_overrides};
 use uncoil::study::check;
 
 #[derive(Parser)]
@@ -132,53 +136,91 @@ fn main() -> ExitCode {
             live,
             pace,
         } => {
-            let scene = match scene_file_with_overrides(&scene, &set) {
-                Ok(s) => s,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return ExitCode::from(2);
-                }
-            };
-            let stop = Arc::new(AtomicBool::new(false));
-            let flag = Arc::clone(&stop);
-            // The first Ctrl-C asks the run to stop and finish its files; a second one ends
-            // the process at once.
-            let handler = ctrlc::set_handler(move || {
-                if flag.swap(true, Ordering::SeqCst) {
-                    std::process::exit(130);
-                }
-            });
-            if let Err(e) = handler {
-                eprintln!("warning: Ctrl-C will not finish the files: {e}");
-            }
             let view = View {
                 file: !no_mcap,
                 live,
                 pace,
             };
-            match run_scene(&scene, out, &view, &stop) {
-                Ok((text, end)) => {
-                    print!("{text}");
-                    match end.status() {
-                        Status::Completed => ExitCode::SUCCESS,
-                        Status::Interrupted => {
-                            eprintln!("interrupted: the outputs end at the last step taken");
-                            ExitCode::from(130)
-                        }
-                        Status::Stopped => {
-                            eprintln!("error: the run was stopped by a guard: {end}");
-                            ExitCode::from(3)
-                        }
-                    }
-                }
+            match any_scene_file_with_overrides(&scene, &set) {
+                Ok(AnyScene::Coil(scene)) => run_command(&scene, out, &view),
+                Ok(AnyScene::FoldedChain(chain)) => run_chain_command(&chain, out, &view),
                 Err(e) => {
-                    eprintln!("error: {e:#}");
-                    ExitCode::from(1)
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
                 }
             }
         }
         Command::Compare { scenes } => compare(&scenes),
     }
+}
+
+/// `uncoil run` on a coil's scene.
+fn run_command(scene: &Scene, out: Option<PathBuf>, view: &View) -> ExitCode {
+    let stop = stop_flag();
+    match run_scene(scene, out, view, &stop) {
+        Ok((text, end)) => {
+            print!("{text}");
+            match end.status() {
+                Status::Completed => ExitCode::SUCCESS,
+                Status::Interrupted => {
+                    eprintln!("interrupted: the outputs end at the last step taken");
+                    ExitCode::from(130)
+                }
+                Status::Stopped => {
+                    eprintln!("error: the run was stopped by a guard: {end}");
+                    ExitCode::from(3)
+                }
+            }
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// `uncoil run` on a folded chain: no Foxglove view, its summary on stdout.
+fn run_chain_command(chain: &FoldedChain, out: Option<PathBuf>, view: &View) -> ExitCode {
+    if view.live.is_some() {
+        eprintln!("error: --live: a folded chain has no Foxglove view");
+        return ExitCode::from(2);
+    }
+    let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&chain.name));
+    let stop = stop_flag();
+    eprintln!("running {} into {} ...", chain.name, dir.display());
+    match write_chain_run(chain, &dir, &stop) {
+        Ok(report) => {
+            print!("{}", chain_summary(chain, &report));
+            println!("Wrote {0}/samples.csv and {0}/report.json", dir.display());
+            match report.end {
+                ChainEnd::Interrupted => ExitCode::from(130),
+                ChainEnd::NotFinite => ExitCode::from(3),
+                _ => ExitCode::SUCCESS,
+            }
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// The flag Ctrl-C raises: the first asks the run to stop and finish its files; a second
+/// one ends the process at once.
+fn stop_flag() -> Arc<AtomicBool> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    // The first Ctrl-C asks the run to stop and finish its files; a second one ends
+    // the process at once.
+    let handler = ctrlc::set_handler(move || {
+        if flag.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+    });
+    if let Err(e) = handler {
+        eprintln!("warning: Ctrl-C will not finish the files: {e}");
+    }
+    stop
 }
 
 fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> ExitCode {

@@ -37,6 +37,7 @@ use crate::spiral::{Placed, Spiral, SpiralMoments, rotate};
 
 mod bang;
 mod build;
+pub mod folded;
 mod impulses;
 mod observe;
 mod shed;

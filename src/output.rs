@@ -6,6 +6,7 @@
 
 pub mod compare;
 pub mod fields;
+pub mod folded;
 pub mod inspect;
 pub mod summary;
 pub mod table;

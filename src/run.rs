@@ -3,6 +3,7 @@
 //! times only the model's step, and it never names a file format (outputs are
 //! [`Observer`]s).
 
+pub mod folded;
 pub mod force_window;
 pub mod frame;
 pub mod guard;

@@ -6,6 +6,7 @@
 
 pub mod continuum;
 pub mod exact;
+pub mod folded;
 pub mod forces;
 pub mod rivals;
 mod trajectory;

@@ -2,6 +2,7 @@
 
 mod bang;
 mod cli;
+mod folded;
 mod fuzz;
 mod hard;
 mod house;

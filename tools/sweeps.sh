@@ -23,7 +23,7 @@
 #   bang-piece    ... against the length of its pieces (solver.bang_piece_m)
 #   bang-turns    ... released with one turn left (r = b, the shipped scene) or two (r = 2b)
 #                 (each setting an ensemble of 8 pushes, 0.300-0.307 m/s: the bang is chaotic)
-#   bang-thin-piece  thin tape's final bang against the length of its pieces (b, 5b, 10b)
+#   bang-thin-piece  thin tape's final bang against the length of its pieces (b, 3b, 5b, 10b)
 #   bang-thin-iter   ... with 1 mm pieces, against its solver iterations
 #                 (each setting an ensemble of 8 pushes, 0.100-0.107 m/s)
 #   approach      yoga mat rolled to its last link: where x' stops diverging, against b and
@@ -145,7 +145,7 @@ run_study() {
       -- --title "yoga mat, final bang, turns left at the release" "${bang_report[@]}" ;;
   bang-thin-piece)
     study bang-thin-piece $thin "${thin_pushes[@]}" \
-      --vary solver.bang_piece_m=0.0001,0.0005,0.001 \
+      --vary solver.bang_piece_m=0.0001,0.0003,0.0005,0.001 \
       -- --title "thin tape, final bang, length of its pieces" "${bang_report[@]}" ;;
   bang-thin-iter)
     study bang-thin-iter $thin "${thin_pushes[@]}" --vary solver.bang_piece_m=0.001 \

@@ -7,7 +7,7 @@
 //! The budgets are generous: every shipped scene, and every value the tests and the sweeps
 //! of `tools/sweeps.sh` set, stays at least ten times below each (see the tests).
 
-use crate::scene::validate::{Shown, invalid};
+use crate::scene::rules::{Shown, invalid};
 use crate::scene::{Scene, SceneError, Tape};
 
 /// Engine steps a run may take (count). A step of a small scene takes about 0.1 ms (the

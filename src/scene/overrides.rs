@@ -6,7 +6,8 @@
 use std::fmt;
 use std::str::FromStr;
 
-use crate::scene::{Scene, SceneError};
+use crate::scene::folded::{self, FoldedChain};
+use crate::scene::{AnyScene, Scene, SceneError};
 
 /// One `KEY=VALUE` override. The value is read as a TOML value (`16`, `0.001`, `"spiral"`,
 /// `true`); a word that is not valid TOML is taken as a string, so `contact.model=spiral`
@@ -130,32 +131,9 @@ pub fn scene_with_overrides(
     if overrides.is_empty() {
         return Scene::from_toml_str(text, name);
     }
-    let mut table: toml::Table = toml::from_str(text).map_err(|e| SceneError::Parse {
-        name: name.to_owned(),
-        message: e.to_string(),
-    })?;
-    for o in overrides {
-        set(&mut table, &o.key, o.value.clone())?;
-    }
-    let edited = toml::to_string(&table).map_err(|e| SceneError::Parse {
-        name: name.to_owned(),
-        message: format!("cannot write the overridden scene back as TOML: {e}"),
-    })?;
-    let mut scene = Scene::from_toml_str(&edited, name).map_err(|e| match e {
-        SceneError::Parse { name, message } => SceneError::Parse {
-            name,
-            message: format!("{message}(after the overrides {})", list(overrides)),
-        },
-        other => other,
-    })?;
-    let mut source = text.to_owned();
-    if !source.ends_with('\n') {
-        source.push('\n');
-    }
-    for o in overrides {
-        source.push_str(&format!("# override: {} = {}\n", o.key, o.value));
-    }
-    scene.source_text = source;
+    let edited = edited(text, name, overrides)?;
+    let mut scene = Scene::from_toml_str(&edited, name).map_err(|e| after(e, overrides))?;
+    scene.source_text = noted(text, overrides);
     Ok(scene)
 }
 
@@ -167,6 +145,77 @@ pub fn scene_file_with_overrides(
 ) -> Result<Scene, SceneError> {
     let (text, stem) = crate::scene::read_scene_file(path)?;
     scene_with_overrides(&text, &stem, overrides)
+}
+
+/// Reads the scene file at `path`, of either kind (its top-level `kind`), and applies
+/// `overrides` as [`scene_with_overrides`] does.
+pub fn any_scene_file_with_overrides(
+    path: &std::path::Path,
+    overrides: &[Override],
+) -> Result<AnyScene, SceneError> {
+    let (text, stem) = crate::scene::read_scene_file(path)?;
+    let kind = toml::from_str::<toml::Table>(&text)
+        .ok()
+        .and_then(|t| t.get("kind").cloned());
+    match kind {
+        None => scene_with_overrides(&text, &stem, overrides).map(|s| AnyScene::Coil(Box::new(s))),
+        Some(toml::Value::String(k)) if k == folded::KIND => {
+            let edited = edited(&text, &stem, overrides)?;
+            let mut chain =
+                FoldedChain::from_toml_str(&edited, &stem).map_err(|e| after(e, overrides))?;
+            chain.source_text = noted(&text, overrides);
+            Ok(AnyScene::FoldedChain(chain))
+        }
+        Some(other) => Err(SceneError::Invalid {
+            key: "kind".into(),
+            value: other.to_string(),
+            rule: format!("must be \"{}\", or absent for a coil", folded::KIND),
+        }),
+    }
+}
+
+/// `text` with `overrides` set in it, written back as TOML.
+fn edited(text: &str, name: &str, overrides: &[Override]) -> Result<String, SceneError> {
+    if overrides.is_empty() {
+        return Ok(text.to_owned());
+    }
+    let mut table: toml::Table = toml::from_str(text).map_err(|e| SceneError::Parse {
+        name: name.to_owned(),
+        message: e.to_string(),
+    })?;
+    for o in overrides {
+        set(&mut table, &o.key, o.value.clone())?;
+    }
+    toml::to_string(&table).map_err(|e| SceneError::Parse {
+        name: name.to_owned(),
+        message: format!("cannot write the overridden scene back as TOML: {e}"),
+    })
+}
+
+/// A parse error of the edited text, naming the overrides it came after.
+fn after(e: SceneError, overrides: &[Override]) -> SceneError {
+    match e {
+        SceneError::Parse { name, message } if !overrides.is_empty() => SceneError::Parse {
+            name,
+            message: format!("{message}(after the overrides {})", list(overrides)),
+        },
+        other => other,
+    }
+}
+
+/// The file's text followed by one `# override:` comment per override.
+fn noted(text: &str, overrides: &[Override]) -> String {
+    let mut source = text.to_owned();
+    if overrides.is_empty() {
+        return source;
+    }
+    if !source.ends_with('\n') {
+        source.push('\n');
+    }
+    for o in overrides {
+        source.push_str(&format!("# override: {} = {}\n", o.key, o.value));
+    }
+    source
 }
 
 fn list(overrides: &[Override]) -> String {

@@ -5,13 +5,13 @@
 //! (`solver.bang_piece_m`, `stop.bang_radius_m`), or bound the size of the run (that is
 //! `budget`'s, checked last).
 
-use std::fmt::Display;
 use std::ops::RangeInclusive;
 
 use crate::scene::budget::{self, MAX_LINKS};
 use crate::scene::file::{
     DiscretisationFile, FloorFile, OutputFile, PushFile, SceneFile, SolverFile, StopFile, TapeFile,
 };
+use crate::scene::rules::{check, check_int, invalid, name};
 use crate::scene::{
     Axis, Discretisation, Floor, Gravity, Output, Push, Scene, SceneError, Solver, Stop, Tape,
 };
@@ -37,55 +37,6 @@ const MAX_CONTACT_SPEED_M_S: f64 = 1000.0;
 const MAX_MAX_DT_S: f64 = 0.1;
 /// Bound of `floor.slope_deg` (degrees, either sign).
 const MAX_SLOPE_DEG: f64 = 45.0;
-
-/// The error for `key = value` breaking `rule`.
-pub(super) fn invalid(key: &str, value: impl Display, rule: impl Into<String>) -> SceneError {
-    SceneError::Invalid {
-        key: key.to_owned(),
-        value: value.to_string(),
-        rule: rule.into(),
-    }
-}
-
-/// A float as written in messages: plainly, or in exponent form when huge or tiny (so that
-/// `1e300` does not print 301 digits).
-pub(super) struct Shown(pub(super) f64);
-
-impl Display for Shown {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let v = self.0.abs();
-        if v >= 1e15 || (v > 0.0 && v < 1e-6) {
-            write!(f, "{:e}", self.0)
-        } else {
-            write!(f, "{}", self.0)
-        }
-    }
-}
-
-/// Rejects NaN and infinities, then returns `value` if `ok`, else an error with `rule`.
-/// `ok` is evaluated by the caller; for a non-finite value the finiteness error wins.
-fn check(key: &str, value: f64, ok: bool, rule: impl Into<String>) -> Result<f64, SceneError> {
-    if !value.is_finite() {
-        return Err(invalid(key, value, "must be finite"));
-    }
-    if ok {
-        Ok(value)
-    } else {
-        Err(invalid(key, Shown(value), rule))
-    }
-}
-
-/// Returns `value` as `u32` if it lies in `range`, else an error with `rule`.
-fn check_int(key: &str, value: i64, range: &RangeInclusive<i64>) -> Result<u32, SceneError> {
-    match u32::try_from(value) {
-        Ok(v) if range.contains(&value) => Ok(v),
-        _ => Err(invalid(
-            key,
-            value,
-            format!("must be >= {} and <= {}", range.start(), range.end()),
-        )),
-    }
-}
 
 impl Scene {
     /// Checks every value of `file` once, in dependency order (later rules may rely on
@@ -136,15 +87,6 @@ impl Scene {
         budget::check(&scene)?;
         Ok(scene)
     }
-}
-
-/// `name`: the file's, else `default_name`; not blank.
-fn name(name: Option<String>, default_name: &str) -> Result<String, SceneError> {
-    let name = name.unwrap_or_else(|| default_name.to_owned());
-    if name.trim().is_empty() {
-        return Err(invalid("name", format!("{name:?}"), "must not be empty"));
-    }
-    Ok(name)
 }
 
 /// `[tape]`: R in its range, 0 < b < R/2, the mass, and a core leaving at least one turn.

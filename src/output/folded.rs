@@ -1,0 +1,171 @@
+//! A folded chain's outputs: `samples.csv` (streamed into `.partial`, renamed when
+//! complete), `report.json` (atomic), and the readable summary. The chain has no Foxglove
+//! view: an older `run.mcap` in the folder is removed so that it is not taken for this
+//! run's.
+
+use std::fs::{self, File};
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+
+use anyhow::Context as _;
+use serde::Serialize;
+
+use crate::output::table::Table;
+use crate::output::{partial_path, remove_stale, write_atomic};
+use crate::run::folded::{ChainEnd, ChainReport, Crossing, run_chain};
+use crate::scene::folded::FoldedChain;
+
+/// What `report.json` holds for a folded chain: the scene as given and what the run found.
+#[derive(Serialize)]
+struct Written<'a> {
+    kind: &'static str,
+    scene: &'a FoldedChain,
+    report: &'a ChainReport,
+}
+
+/// Runs `scene` into the folder `dir` (created if missing): `samples.csv` and
+/// `report.json`.
+pub fn write_chain_run(
+    scene: &FoldedChain,
+    dir: &Path,
+    stop: &AtomicBool,
+) -> anyhow::Result<ChainReport> {
+    fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let (csv_path, json_path) = (dir.join("samples.csv"), dir.join("report.json"));
+    for old in [&csv_path, &json_path, &dir.join("run.mcap")] {
+        remove_stale(old)?;
+    }
+    let tmp = partial_path(&csv_path);
+    let file = File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
+    let mut csv = csv::Writer::from_writer(file);
+    let report = run_chain(
+        scene,
+        &mut |s| {
+            csv.serialize(s)
+                .with_context(|| format!("cannot write {}", tmp.display()))
+        },
+        stop,
+    )?;
+    let file = csv
+        .into_inner()
+        .map_err(|e| e.into_error())
+        .and_then(|f| f.sync_all().map(|()| f))
+        .with_context(|| format!("cannot write {}", tmp.display()))?;
+    drop(file);
+    fs::rename(&tmp, &csv_path)
+        .with_context(|| format!("cannot rename to {}", csv_path.display()))?;
+    let written = Written {
+        kind: crate::scene::folded::KIND,
+        scene,
+        report: &report,
+    };
+    let mut text = serde_json::to_string_pretty(&written)?;
+    text.push('\n');
+    write_atomic(&json_path, text.as_bytes())?;
+    Ok(report)
+}
+
+/// The readable summary of a folded chain's run.
+pub fn chain_summary(scene: &FoldedChain, r: &ChainReport) -> String {
+    let c = &scene.chain;
+    let s = &scene.solver;
+    let floor = if scene.floor.enabled {
+        format!(
+            "onto a floor {} m below the pin (friction {})",
+            scene.pin_height_m, scene.floor.friction
+        )
+    } else {
+        "no floor".to_owned()
+    };
+    let mut o = format!(
+        "{}: a folded chain of {} links, L = {} m, M = {} kg, ends {} m apart, {floor}\n\
+         solver: {} substeps of a {} s step, {} relax sweep(s), joints at {:e} Hz\n",
+        r.name,
+        c.links,
+        c.length_m,
+        c.mass_kg,
+        c.separation_m,
+        s.substeps,
+        s.dt_s,
+        s.relax_iterations,
+        s.joint_hz,
+    );
+    let end = match r.end {
+        ChainEnd::TipFraction => format!("the tip fell {} L", scene.stop.tip_fraction),
+        ChainEnd::Rest => "at rest".to_owned(),
+        ChainEnd::MaxTime => "max time".to_owned(),
+        ChainEnd::Interrupted => "interrupted".to_owned(),
+        ChainEnd::NotFinite => "stopped: the state is no longer finite".to_owned(),
+    };
+    o.push_str(&format!(
+        "ended: {end} at t = {:.4} s ({} steps, engine {:.2} s)\n\n",
+        r.t_end_s, r.steps, r.wall_time_s
+    ));
+    o.push_str("The tip against the closed form (separation 0, energy conserved):\n");
+    o.push_str(&crossing_table(&r.crossings).text("  "));
+    if r.crossings.iter().any(|c| !c.closed_form_applies) {
+        o.push_str(
+            "  * the fold or the tip had reached the floor: the closed form no longer applies\n",
+        );
+    }
+    let g = scene.gravity.g_m_s2;
+    o.push_str(&format!(
+        "  closed-form fall time t(L) = {:.5} s = {:.4} sqrt(2L/g)\n\n",
+        r.fall_time_closed_s,
+        r.fall_time_closed_s / (2.0 * c.length_m / g).sqrt()
+    ));
+    let l = &r.ledger;
+    let lost = r.released_j - r.kinetic_j;
+    let share = |v: f64| {
+        if r.released_j > 0.0 {
+            format!("{:.3} %", 100.0 * v / r.released_j)
+        } else {
+            "-".into()
+        }
+    };
+    o.push_str(&format!(
+        "Energy at the end, as shares of the {:.6e} J released: kinetic {}, lost {}\n  \
+         floor normal {}, floor friction {}, joints {}, residual {}; numerical (|joints| + \
+         |residual|) {}\n",
+        r.released_j,
+        share(r.kinetic_j),
+        share(lost),
+        share(l.floor_normal_j),
+        share(l.floor_friction_j),
+        share(l.joints_j),
+        share(l.residual_j),
+        share(l.numerical_j()),
+    ));
+    o
+}
+
+/// The crossings as a table: time and speed against the closed form, and the joints' work.
+fn crossing_table(crossings: &[Crossing]) -> Table {
+    let mut t = Table::new([
+        "x/L",
+        "t (s)",
+        "closed",
+        "t error",
+        "v (m/s)",
+        "closed",
+        "v error",
+        "joints / released",
+        "numerical / released",
+    ]);
+    let pct = |a: f64, b: f64| format!("{:+.3} %", 100.0 * (a / b - 1.0));
+    for c in crossings {
+        let note = if c.closed_form_applies { "" } else { " *" };
+        t.push([
+            format!("{}{note}", c.fraction),
+            format!("{:.5}", c.t_s),
+            format!("{:.5}", c.t_closed_s),
+            pct(c.t_s, c.t_closed_s),
+            format!("{:.4}", c.speed_m_s),
+            format!("{:.4}", c.speed_closed_m_s),
+            pct(c.speed_m_s, c.speed_closed_m_s),
+            format!("{:.3} %", 100.0 * c.joints_j / c.released_j),
+            format!("{:.3} %", 100.0 * c.numerical_j / c.released_j),
+        ]);
+    }
+    t
+}

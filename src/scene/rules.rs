@@ -1,0 +1,75 @@
+//! The vocabulary of the scene rules, shared by every scene kind: the error for
+//! `key = value: rule`, a float as a message shows it, and checks that reject NaN and
+//! infinities before their own rule.
+
+use std::fmt::Display;
+use std::ops::RangeInclusive;
+
+use crate::scene::SceneError;
+
+/// The error for `key = value` breaking `rule`.
+pub(super) fn invalid(key: &str, value: impl Display, rule: impl Into<String>) -> SceneError {
+    SceneError::Invalid {
+        key: key.to_owned(),
+        value: value.to_string(),
+        rule: rule.into(),
+    }
+}
+
+/// A float as written in messages: plainly, or in exponent form when huge or tiny (so that
+/// `1e300` does not print 301 digits).
+pub(super) struct Shown(pub(super) f64);
+
+impl Display for Shown {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0.abs();
+        if v >= 1e15 || (v > 0.0 && v < 1e-6) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
+
+/// Rejects NaN and infinities, then returns `value` if `ok`, else an error with `rule`.
+/// `ok` is evaluated by the caller; for a non-finite value the finiteness error wins.
+pub(super) fn check(
+    key: &str,
+    value: f64,
+    ok: bool,
+    rule: impl Into<String>,
+) -> Result<f64, SceneError> {
+    if !value.is_finite() {
+        return Err(invalid(key, value, "must be finite"));
+    }
+    if ok {
+        Ok(value)
+    } else {
+        Err(invalid(key, Shown(value), rule))
+    }
+}
+
+/// Returns `value` as `u32` if it lies in `range`, else an error with `rule`.
+pub(super) fn check_int(
+    key: &str,
+    value: i64,
+    range: &RangeInclusive<i64>,
+) -> Result<u32, SceneError> {
+    match u32::try_from(value) {
+        Ok(v) if range.contains(&value) => Ok(v),
+        _ => Err(invalid(
+            key,
+            value,
+            format!("must be >= {} and <= {}", range.start(), range.end()),
+        )),
+    }
+}
+
+/// `name`: the file's, else `default_name`; not blank.
+pub(super) fn name(name: Option<String>, default_name: &str) -> Result<String, SceneError> {
+    let name = name.unwrap_or_else(|| default_name.to_owned());
+    if name.trim().is_empty() {
+        return Err(invalid("name", format!("{name:?}"), "must not be empty"));
+    }
+    Ok(name)
+}
