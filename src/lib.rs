@@ -1,6 +1,6 @@
 //! `uncoil`: a coiled tape uncoiling on a floor, simulated as a chain of rigid links in
 //! rapier2d and held against K. T. McDonald's continuum theory ("Uncoiling on a Horizontal
-//! Surface", with the corrections listed in ERRATA.md).
+//! Surface", with the corrections listed in docs/errata.md).
 //!
 //! The crate is a stack of layers; each imports only the layers below it (a test,
 //! `house::each_layer_imports_only_the_layers_below_it` in `tests/house.rs`, keeps the rule):

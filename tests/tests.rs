@@ -2,6 +2,7 @@
 
 mod bang;
 mod cli;
+mod errata;
 mod folded;
 mod fuzz;
 mod hard;

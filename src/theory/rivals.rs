@@ -1,5 +1,5 @@
 //! The competing analytic equations of motion the paper gives for each variant (App. A-D,
-//! sec. 2), with the corrections of ERRATA.md, as times to reach a laid mass fraction.
+//! sec. 2), with the corrections of docs/errata.md, as times to reach a laid mass fraction.
 //! Pure `f64`, no engine types; this module neither simulates nor prints.
 //!
 //! Every rival is one degree of freedom. Those with a first integral are tabulated by the
