@@ -22,13 +22,13 @@ if ! command -v chromium > /dev/null; then
 fi
 (cd "$here" && npm ci --silent --no-audit --no-fund --ignore-scripts)
 if [ "${1:-}" = --live ]; then
-  cargo build --locked --quiet
+  cargo build --release --locked --quiet
   port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
   out="$(mktemp -d)"
   trap 'rm -rf "$out"' EXIT
   CHROMIUM="$(command -v chromium)" node "$here/replay.mjs" --live "$port" \
     tools/foxglove-layout.json "${2:-docs/foxglove-live.png}" -- \
-    target/debug/uncoil run scenes/yoga-mat.toml --no-mcap --out "$out" \
+    target/release/uncoil run scenes/yoga-mat.toml --no-mcap --out "$out" \
     --live "127.0.0.1:$port" --pace 0.05
   exit
 fi
@@ -36,7 +36,7 @@ mcap=${1:-}
 if [ -z "$mcap" ]; then
   out="$(mktemp -d)"
   trap 'rm -rf "$out"' EXIT
-  cargo run --locked --quiet -- run scenes/yoga-mat.toml --out "$out" > /dev/null 2>&1
+  cargo run --release --locked --quiet -- run scenes/yoga-mat.toml --out "$out" > /dev/null 2>&1
   mcap="$out/run.mcap"
 fi
 CHROMIUM="$(command -v chromium)" node "$here/replay.mjs" "$mcap" tools/foxglove-layout.json \

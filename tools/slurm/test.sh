@@ -3,10 +3,10 @@
 # sweep runs as a 2-task array job (tools/slurm/sweep.sbatch, `sbatch --wait`), its shards
 # are merged, and the merged sweep.csv must equal the same sweep run locally in every column
 # but the wall times. Needs root (the cluster) and a built binary.
-# Usage: tools/slurm/test.sh [UNCOIL_BINARY]   (default: target/debug/uncoil)
+# Usage: tools/slurm/test.sh [UNCOIL_BINARY]   (default: target/release/uncoil)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-bin=$(realpath "${1:-target/debug/uncoil}")
+bin=$(realpath "${1:-target/release/uncoil}")
 [ -x "$bin" ] || { echo "error: no binary at $bin (cargo build)" >&2; exit 1; }
 tools/slurm/cluster.sh start
 work=$(mktemp -d /var/tmp/uncoil-slurm-test.XXXXXX)
