@@ -43,7 +43,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a scene: simulate, compare with the references, write samples.csv and report.json.
+    /// Run a scene: simulate, compare with the references, write samples.csv, report.json and
+    /// run.mcap (the Foxglove log) into the output folder. A folded chain
+    /// (scenes/validation/) writes samples.csv and report.json.
     Run {
         /// The scene file (TOML), e.g. scenes/yoga-mat.toml.
         scene: PathBuf,
@@ -56,7 +58,8 @@ enum Command {
         /// Do not write run.mcap.
         #[arg(long)]
         no_mcap: bool,
-        /// Serve the run live to Foxglove (WebSocket) at ADDR while it goes.
+        /// Serve the run live to Foxglove (WebSocket) at ADDR while it goes [default ADDR:
+        /// 127.0.0.1:8765].
         #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = LIVE_ADDR)]
         live: Option<std::net::SocketAddr>,
         /// With --live: hold simulated time to X times real time (0.1: ten times slower).
@@ -72,7 +75,8 @@ enum Command {
     Sweep(cli::sweep::SweepArgs),
     /// Report on a sweep: Pareto and convergence plots (SVG) and report.md (also on stdout).
     SweepReport(cli::sweep::ReportArgs),
-    /// Draw a run's motion.svg and energy.svg from its samples.csv and report.json.
+    /// Draw a run's motion.svg, energy.svg, approach.svg and forces.svg into its folder,
+    /// from its samples.csv and report.json.
     Plot {
         /// A run's output folder, e.g. runs/yoga-mat.
         dir: PathBuf,

@@ -177,6 +177,13 @@ fn sweep_shards_merge_and_report() {
             .unwrap()
             .contains("<svg")
     );
+    for f in [
+        "pareto.svg",
+        "convergence-discretisation.links_per_turn.svg",
+    ] {
+        let svg = std::fs::read_to_string(full.join(f)).unwrap();
+        crate::support::check_legends(&svg);
+    }
 }
 
 /// A run a guard stops is recorded as stopped, the sweep exits 3 as `uncoil run` does, and
@@ -286,6 +293,27 @@ fn run_with_set_then_plot() {
             .unwrap()
             .contains("exact-geometry model")
     );
+    // Every legend swatch is drawn as its line: the references dashed, the simulation not.
+    for f in ["motion.svg", "energy.svg", "approach.svg", "forces.svg"] {
+        let svg = std::fs::read_to_string(out.join(f)).unwrap();
+        let swatches = crate::support::check_legends(&svg);
+        assert!(
+            swatches.iter().any(|s| s.2) && swatches.iter().any(|s| !s.2),
+            "{f}: {swatches:?}"
+        );
+        for (label, _, dashed) in &swatches {
+            let reference = label == "exact-geometry model"
+                || label == "eq. (7)"
+                || label.ends_with(" exact")
+                || label.ends_with("exact (least pull)");
+            if label.contains("simulation") || reference {
+                assert_eq!(
+                    *dashed, reference,
+                    "{f}: {label}: simulation solid, references dashed"
+                );
+            }
+        }
+    }
     uncoil()
         .arg("run")
         .arg(yoga())

@@ -12,6 +12,7 @@ mod sweep;
 
 use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
+use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
 pub use self::run::plot_run;
@@ -75,6 +76,79 @@ fn log_range(vs: impl IntoIterator<Item = f64>) -> (f64, f64) {
     (lo / 1.3, hi * 1.3)
 }
 
+/// How a line is drawn: its colour, its width and its dash (dash and gap, px; none for a
+/// solid line). Its series and its legend swatch are both drawn from it ([`draw_line`]), so
+/// a swatch always looks like its line.
+#[derive(Debug, Clone, Copy)]
+struct Line {
+    color: RGBColor,
+    width: u32,
+    dash: Option<(u32, u32)>,
+}
+
+impl Line {
+    /// A solid line.
+    const fn solid(color: RGBColor, width: u32) -> Self {
+        Self {
+            color,
+            width,
+            dash: None,
+        }
+    }
+
+    /// A dashed line: dashes of `dash` px with gaps of `gap` px.
+    const fn dashed(color: RGBColor, width: u32, dash: u32, gap: u32) -> Self {
+        Self {
+            color,
+            width,
+            dash: Some((dash, gap)),
+        }
+    }
+
+    /// The references' dash and the simulation's solid line, at width 2.
+    const fn curve(color: RGBColor, dashed: bool) -> Self {
+        if dashed {
+            Self::dashed(color, 2, 8, 5)
+        } else {
+            Self::solid(color, 2)
+        }
+    }
+
+    fn style(self) -> ShapeStyle {
+        self.color.stroke_width(self.width)
+    }
+}
+
+/// Length of a legend swatch (px).
+const SWATCH_PX: u32 = 20;
+
+/// Draws `points` as `line` on `chart` under `label`, with a legend swatch drawn as the
+/// line is: one stroke for a solid line, the same dashes for a dashed one.
+fn draw_line<'a, DB, CT>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    points: Vec<CT::From>,
+    line: Line,
+    label: impl Into<String>,
+) -> anyhow::Result<()>
+where
+    DB: DrawingBackend,
+    CT: CoordTranslate,
+    CT::From: Clone + 'static,
+{
+    let style = line.style();
+    let anno = match line.dash {
+        None => chart.draw_series(LineSeries::new(points, style)),
+        Some((dash, gap)) => chart.draw_series(DashedLineSeries::new(points, dash, gap, style)),
+    }
+    .map_err(err)?;
+    // A solid swatch is one dash as long as the swatch.
+    let (dash, gap) = line.dash.unwrap_or((SWATCH_PX, SWATCH_PX));
+    anno.label(label).legend(move |(x, y)| {
+        DashedPathElement::new(vec![(x, y), (x + SWATCH_PX as i32, y)], dash, gap, style)
+    });
+    Ok(())
+}
+
 /// One curve of a line chart.
 struct Curve<'a> {
     label: &'a str,
@@ -109,19 +183,12 @@ fn line_chart(
         .draw()
         .map_err(err)?;
     for c in curves {
-        let color = c.color;
-        let style = color.stroke_width(2);
-        if c.dashed {
-            chart
-                .draw_series(DashedLineSeries::new(c.points.iter().copied(), 8, 5, style))
-                .map_err(err)?
-        } else {
-            chart
-                .draw_series(LineSeries::new(c.points.iter().copied(), style))
-                .map_err(err)?
-        }
-        .label(c.label)
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+        draw_line(
+            &mut chart,
+            c.points.clone(),
+            Line::curve(c.color, c.dashed),
+            c.label,
+        )?;
     }
     extra(&mut chart)?;
     chart

@@ -8,8 +8,8 @@ use anyhow::Context as _;
 use plotters::prelude::*;
 
 use super::{
-    Area, Curve, EQ7, EXACT, FONT, LinChart, LogChart, SIM, color, err, legend, line_chart,
-    log_chart, log_range, pairs, positive_pairs, range,
+    Area, Curve, EQ7, EXACT, FONT, LinChart, Line, LogChart, SIM, color, draw_line, err, legend,
+    line_chart, log_chart, log_range, pairs, positive_pairs, range,
 };
 use crate::run::RunReport;
 use crate::run::limits::LimitKind;
@@ -264,17 +264,12 @@ fn mark_bang_start(
     (y0, y1): (f64, f64),
 ) -> anyhow::Result<()> {
     let c = RGBColor(148, 103, 189);
-    chart
-        .draw_series(DashedLineSeries::new(
-            [(b, y0), (b, y1)],
-            4,
-            4,
-            c.stroke_width(1),
-        ))
-        .map_err(err)?
-        .label("final bang begins")
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1)));
-    Ok(())
+    draw_line(
+        chart,
+        vec![(b, y0), (b, y1)],
+        Line::dashed(c, 1, 4, 4),
+        "final bang begins",
+    )
 }
 
 /// `path`: `N_tot` above, `F_tot` with its split into `F` and `F_int` below, against the
@@ -408,18 +403,7 @@ fn bang_panel(
         .draw()
         .map_err(err)?;
     for (label, points, color, dashed) in curves {
-        let style = color.stroke_width(2);
-        if dashed {
-            chart
-                .draw_series(DashedLineSeries::new(points, 8, 5, style))
-                .map_err(err)?
-        } else {
-            chart
-                .draw_series(LineSeries::new(points, style))
-                .map_err(err)?
-        }
-        .label(label)
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+        draw_line(&mut chart, points, Line::curve(color, dashed), label)?;
     }
     chart
         .configure_series_labels()
@@ -461,18 +445,7 @@ fn approach_plot(path: &Path, run: &RunFiles) -> anyhow::Result<()> {
         ("eq. (7)", &eq7, EQ7, true),
     ];
     for (label, pts, c, dashed) in series {
-        let style = c.stroke_width(2);
-        if dashed {
-            chart
-                .draw_series(DashedLineSeries::new(pts.iter().copied(), 8, 5, style))
-                .map_err(err)?
-        } else {
-            chart
-                .draw_series(LineSeries::new(pts.iter().copied(), style))
-                .map_err(err)?
-        }
-        .label(label)
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+        draw_line(&mut chart, pts.clone(), Line::curve(c, dashed), label)?;
     }
     one_over_r(&mut chart, &eq7)?;
     let marks = approach_marks(&run.report, &t, &r);
@@ -499,16 +472,12 @@ fn one_over_r(chart: &mut LogChart<'_, '_>, eq7: &[(f64, f64)]) -> anyhow::Resul
         eq7.iter().max_by(|a, b| a.0.total_cmp(&b.0)),
     ) {
         let c = RGBColor(127, 127, 127);
-        chart
-            .draw_series(DashedLineSeries::new(
-                [(r0, v0), (r1, v0 * r0 / r1)],
-                3,
-                3,
-                c.stroke_width(1),
-            ))
-            .map_err(err)?
-            .label("x' ~ 1/r (eq. 7 as r -> 0)")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1)));
+        draw_line(
+            chart,
+            vec![(r0, v0), (r1, v0 * r0 / r1)],
+            Line::dashed(c, 1, 3, 3),
+            "x' ~ 1/r (eq. 7 as r -> 0)",
+        )?;
     }
     Ok(())
 }
@@ -551,11 +520,7 @@ fn draw_marks(
             continue;
         }
         let c = color(i + 3);
-        chart
-            .draw_series(LineSeries::new([(at, y0), (at, y1)], c.stroke_width(1)))
-            .map_err(err)?
-            .label(label)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1)));
+        draw_line(chart, vec![(at, y0), (at, y1)], Line::solid(c, 1), label)?;
     }
     Ok(())
 }

@@ -8,8 +8,8 @@ use anyhow::Context as _;
 use plotters::prelude::*;
 
 use super::{
-    Area, EXACT, FONT, LogChart, SIM, color, err, legend, log_chart, log_range, pairs,
-    positive_pairs, range,
+    Area, EXACT, FONT, Line, LogChart, SIM, color, draw_line, err, legend, log_chart, log_range,
+    pairs, positive_pairs, range,
 };
 use crate::study::analysis::{BANG_OBSERVABLES, BangStudy, PowerFit, Study, SweepAnalysis};
 
@@ -37,17 +37,12 @@ fn fit_line<'a, DB: DrawingBackend + 'a>(
     if !lo.is_finite() {
         return Ok(());
     }
-    chart
-        .draw_series(DashedLineSeries::new(
-            [(lo, fit.eval(lo)), (hi, fit.eval(hi))],
-            6,
-            4,
-            c.stroke_width(1),
-        ))
-        .map_err(|e| anyhow::anyhow!("cannot draw: {e}"))?
-        .label(label)
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1)));
-    Ok(())
+    draw_line(
+        chart,
+        vec![(lo, fit.eval(lo)), (hi, fit.eval(hi))],
+        Line::dashed(c, 1, 6, 4),
+        label,
+    )
 }
 
 /// Draws a sweep's pictures into `dir`: `pareto.svg` (error against cost, log-log, one
@@ -116,25 +111,17 @@ fn pareto_plot(path: &Path, a: &SweepAnalysis, title: &str) -> anyhow::Result<()
         .filter(|&&i| a.err[i] > 0.0)
         .map(|&i| (a.cost[i], a.err[i]))
         .collect();
-    chart
-        .draw_series(LineSeries::new(front, BLACK.stroke_width(1)))
-        .map_err(err)?
-        .label("Pareto front")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+    draw_line(&mut chart, front, Line::solid(BLACK, 1), "Pareto front")?;
     if let Some((e, c)) = a.target {
         let (x0, _) = log_range(idx.iter().map(|&i| a.cost[i]).chain([c]));
         let (y0, _) = log_range(idx.iter().map(|&i| a.err[i]).chain([e]));
         let grey = RGBColor(127, 127, 127);
-        chart
-            .draw_series(DashedLineSeries::new(
-                [(x0, e), (c, e), (c, y0)],
-                6,
-                4,
-                grey.stroke_width(2),
-            ))
-            .map_err(err)?
-            .label(format!("target: <= {:.2}% in <= {c} s", 100.0 * e))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey));
+        draw_line(
+            &mut chart,
+            vec![(x0, e), (c, e), (c, y0)],
+            Line::dashed(grey, 2, 6, 4),
+            format!("target: <= {:.2}% in <= {c} s", 100.0 * e),
+        )?;
     }
     legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     root.present().map_err(err)?;
