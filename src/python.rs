@@ -19,8 +19,9 @@ use crate::run::{Observer, RunReport, Sample, run_until};
 use crate::scene::Scene;
 use crate::scene::overrides::{Override, scene_file_with_overrides};
 
+// Raised as `uncoil.SceneError`: the package re-exports it, and a traceback names it so.
 pyo3::create_exception!(
-    _uncoil,
+    uncoil,
     SceneError,
     PyValueError,
     "A scene file or an override that is not valid: the command line's `key = value: rule`."
@@ -69,6 +70,19 @@ fn load_scene(path: PathBuf, overrides: Vec<(String, String)>) -> PyResult<PySce
     scene_file_with_overrides(&path, &overrides)
         .map(|inner| PyScene { inner })
         .map_err(|e| SceneError::new_err(e.to_string()))
+}
+
+/// The names of the shipped scenes `load_scene` and `run` take instead of a path (the coil
+/// scenes; the folded chain is the command line's).
+#[pyfunction]
+fn scenes() -> Vec<&'static str> {
+    crate::scene::shipped::names()
+        .into_iter()
+        .filter(|name| {
+            crate::scene::shipped::text(name)
+                .is_some_and(|text| Scene::from_toml_str(text, name).is_ok())
+        })
+        .collect()
 }
 
 /// The samples of a run, column by column, in `samples.csv`'s order.
@@ -277,6 +291,7 @@ fn _uncoil(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SceneError", m.py().get_type::<SceneError>())?;
     m.add_class::<PyScene>()?;
     m.add_function(wrap_pyfunction!(load_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(scenes, m)?)?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(theory, m)?)?;
     m.add_function(wrap_pyfunction!(sweep, m)?)?;

@@ -14,6 +14,7 @@ mod file;
 pub mod folded;
 pub mod overrides;
 mod rules;
+pub mod shipped;
 mod validate;
 
 use std::path::{Path, PathBuf};
@@ -29,7 +30,11 @@ pub use file::SCENE_KEYS;
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// The scene file could not be read.
-    #[error("cannot read scene file {}: {source}", path.display())]
+    #[error(
+        "cannot read scene file {}: {source} (a shipped scene can be named instead: {})",
+        path.display(),
+        shipped::names().join(", ")
+    )]
     Read {
         /// Path of the file that could not be read.
         path: PathBuf,
@@ -248,17 +253,25 @@ pub enum AnyScene {
     FoldedChain(folded::FoldedChain),
 }
 
-/// The text of the scene file at `path` and its stem, the scene's default name.
+/// The text of the scene file at `path` and its stem, the scene's default name; when no
+/// such file exists and `path` is a shipped scene's name (`yoga-mat`), that scene's.
 pub(crate) fn read_scene_file(path: &Path) -> Result<(String, String), SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
-        path: path.to_owned(),
-        source,
-    })?;
     let stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    Ok((text, stem))
+    match std::fs::read_to_string(path) {
+        Ok(text) => Ok((text, stem)),
+        Err(source) => match path.to_str().and_then(shipped::text) {
+            Some(text) if source.kind() == std::io::ErrorKind::NotFound => {
+                Ok((text.to_owned(), stem))
+            }
+            _ => Err(SceneError::Read {
+                path: path.to_owned(),
+                source,
+            }),
+        },
+    }
 }
 
 impl Scene {

@@ -90,7 +90,7 @@ def test_a_bad_scene_raises_scene_error_with_the_command_lines_text(tmp_path):
     message = str(caught.value)
     assert message.startswith("tape.thickness_m = -1: must be > 0")
     binary = next(
-        (p for p in (ROOT / "target" / d / "uncoil" for d in ("debug", "release")) if p.exists()),
+        (p for p in (ROOT / "target" / d / "uncoil" for d in ("release", "debug")) if p.exists()),
         None,
     )
     if binary is None:
@@ -102,6 +102,22 @@ def test_a_bad_scene_raises_scene_error_with_the_command_lines_text(tmp_path):
     )
     assert cli.returncode == 2
     assert cli.stderr.strip() == f"error: {message}"
+
+
+def test_a_shipped_scene_runs_by_name_from_any_folder(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert "yoga-mat" in uncoil.scenes() and "thin-tape" in uncoil.scenes()
+    scene = uncoil.load_scene("yoga-mat")
+    assert scene.source_text == YOGA.read_text()
+    result = uncoil.run("yoga-mat", overrides={"discretisation.links_per_turn": 12})
+    assert result.stop_reason == "at-rest"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_scene_error_is_raised_as_uncoil_scene_error():
+    assert uncoil.SceneError.__module__ == "uncoil"
+    with pytest.raises(uncoil.SceneError, match="a shipped scene can be named instead: yoga-mat"):
+        uncoil.load_scene("no-such-scene")
 
 
 def test_a_scene_object_runs_and_rejects_overrides():

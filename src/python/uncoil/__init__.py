@@ -1,8 +1,10 @@
 """uncoil from Python: load a scene, run it, get its samples as numpy arrays.
 
     import uncoil
-    result = uncoil.run("scenes/yoga-mat.toml", overrides={"push.contact_speed_m_s": 0.4})
+    result = uncoil.run("yoga-mat", overrides={"push.contact_speed_m_s": 0.4})
     print(result.stop_reason, result.samples["r_m"][-1])
+
+A scene is a shipped scene's name (`uncoil.scenes()` lists them) or the path of a scene file.
 
 The simulation is the Rust crate's (the extension module `uncoil._uncoil`); this layer only
 turns what it returns into numpy arrays and dicts. A run writes files only when `out` is
@@ -28,6 +30,7 @@ __all__ = [
     "SceneError",
     "load_scene",
     "run",
+    "scenes",
     "sweep",
     "theory",
     "__version__",
@@ -54,9 +57,15 @@ def _toml_value(value: Any) -> str:
     raise TypeError(f"an override must be a number, a bool or a string, not {type(value).__name__}")
 
 
+def scenes() -> List[str]:
+    """The names of the shipped scenes, which `load_scene` and `run` take in place of a path."""
+    return list(_uncoil.scenes())
+
+
 def load_scene(path: PathLikeStr, overrides: Optional[Mapping[str, Any]] = None) -> Scene:
-    """The scene in the TOML file at `path`, with `overrides` ({"solver.max_dt_s": 5e-4})
-    applied as `uncoil run --set` applies them.
+    """The scene in the TOML file at `path` (or the shipped scene of that name, when no such
+    file exists), with `overrides` ({"solver.max_dt_s": 5e-4}) applied as `uncoil run --set`
+    applies them.
 
     Raises `SceneError` with the command line's message when the scene is not valid.
     """
