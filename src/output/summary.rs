@@ -31,7 +31,10 @@ fn coil_times(o: &mut String, report: &RunReport) {
         "  {:<6} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
         "r", "f", "sim s", "exact s", "eq.7 s", "eq.17 s", "sim/ex", "sim/eq7", "ex/eq7"
     );
-    for m in &report.milestones {
+    // In the order the run reaches them: 2b comes before 0.1R on a thick tape.
+    let mut milestones: Vec<_> = report.milestones.iter().collect();
+    milestones.sort_by(|a, b| a.laid_fraction.total_cmp(&b.laid_fraction));
+    for m in milestones {
         let _ = writeln!(
             o,
             "  {:<6} {:>7.4} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",

@@ -192,13 +192,27 @@ fn edited(text: &str, name: &str, overrides: &[Override]) -> Result<String, Scen
     })
 }
 
-/// A parse error of the edited text, naming the overrides it came after.
+/// A parse error of the edited text, naming the overrides it came after. The parser's
+/// location (a line of the scene as rewritten with the overrides, a text the user never
+/// wrote) is dropped; its message is kept.
 fn after(e: SceneError, overrides: &[Override]) -> SceneError {
     match e {
-        SceneError::Parse { name, message } if !overrides.is_empty() => SceneError::Parse {
-            name,
-            message: format!("{message}(after the overrides {})", list(overrides)),
-        },
+        SceneError::Parse { name, message } if !overrides.is_empty() => {
+            let core: Vec<&str> = message
+                .lines()
+                .skip_while(|l| !l.contains('^'))
+                .skip(1)
+                .collect();
+            let core = if core.is_empty() {
+                message.trim_end().to_owned()
+            } else {
+                core.join("\n")
+            };
+            SceneError::Parse {
+                name,
+                message: format!("{core} (after the overrides {})", list(overrides)),
+            }
+        }
         other => other,
     }
 }
@@ -310,6 +324,8 @@ mod tests {
             .to_string();
         assert!(e.contains("unknown field `max_dt`"), "{e}");
         assert!(e.contains("after the overrides solver.max_dt=0.001"), "{e}");
+        // No line of the rewritten text the user never wrote.
+        assert!(!e.contains("parse error at line"), "{e}");
         let e = scene_with_overrides(YOGA, "y", &[ov("colour.hue=1")])
             .unwrap_err()
             .to_string();
