@@ -9,16 +9,16 @@
 //! `report.json`, and the outputs hold everything logged up to the stop), 130 a run stopped
 //! by Ctrl-C (its outputs are complete up to there).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use anyhow::Context as _;
 use clap::{Parser, Subcommand};
 
 use uncoil::output::compare::{SampleLog, table};
 use uncoil::output::folded::{chain_summary, write_chain_run};
+use uncoil::output::folder::{FolderError, RunFolder, run_id};
 use uncoil::output::view::ViewObserver;
 use uncoil::output::{CsvObserver, ReportObserver, summary};
 use uncoil::run::folded::ChainEnd;
@@ -81,10 +81,12 @@ enum Command {
         /// A run's output folder, e.g. runs/yoga-mat.
         dir: PathBuf,
     },
-    /// Run every scene of a folder (the hard cases), verify the outputs, print a table.
-    /// Exit 0 when every case ends with a stated reason and sound outputs, else 1.
+    /// Run every scene of a folder (the hard cases), verify the outputs, print a table; or,
+    /// given a run's output folder (one with a report.json), verify that its files are sound
+    /// and belong to one run. Exit 0 when every case ends with a stated reason and sound
+    /// outputs, else 1.
     Check {
-        /// Folder of scene files (default: scenes/hard).
+        /// Folder of scene files (default: scenes/hard), or a run's output folder.
         dir: Option<PathBuf>,
         /// Output folder, one subfolder per case (default: runs/check).
         #[arg(long)]
@@ -160,8 +162,13 @@ fn main() -> ExitCode {
 
 /// `uncoil run` on a coil's scene.
 fn run_command(scene: &Scene, out: Option<PathBuf>, view: &View) -> ExitCode {
+    let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&scene.name));
+    let folder = match take_folder(&dir, &scene.name, &scene.source_text) {
+        Ok(f) => f,
+        Err(code) => return code,
+    };
     let stop = stop_flag();
-    match run_scene(scene, out, view, &stop) {
+    match run_scene(scene, folder.dir(), view, &stop) {
         Ok((text, end)) => {
             print!("{text}");
             match end.status() {
@@ -190,6 +197,10 @@ fn run_chain_command(chain: &FoldedChain, out: Option<PathBuf>, view: &View) -> 
         return ExitCode::from(2);
     }
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&chain.name));
+    let _folder = match take_folder(&dir, &chain.name, &chain.source_text) {
+        Ok(f) => f,
+        Err(code) => return code,
+    };
     let stop = stop_flag();
     eprintln!("running {} into {} ...", chain.name, dir.display());
     match write_chain_run(chain, &dir, &stop) {
@@ -229,6 +240,20 @@ fn stop_flag() -> Arc<AtomicBool> {
 
 fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> ExitCode {
     let dir = dir.unwrap_or_else(|| PathBuf::from("scenes/hard"));
+    if dir.join(uncoil::output::folder::REPORT).exists() {
+        let problems = check::verify_outputs(&dir);
+        for p in &problems {
+            println!("{}: {p}", dir.display());
+        }
+        if problems.is_empty() {
+            println!(
+                "{}: the files are sound and belong to one run",
+                dir.display()
+            );
+            return ExitCode::SUCCESS;
+        }
+        return ExitCode::from(1);
+    }
     let out = out.unwrap_or_else(|| PathBuf::from("runs/check"));
     let files = match check::scene_files(&dir) {
         Ok(f) if f.is_empty() => {
@@ -333,15 +358,25 @@ fn serve(log: &mut ViewObserver, view: &View) -> anyhow::Result<()> {
 }
 
 /// Runs `scene` into its output folder; returns the summary and why the run stopped.
+/// Takes the output folder `dir` for a run of the scene `name` (text `text`): exit 2 if
+/// another run holds it, 1 if it cannot be made.
+fn take_folder(dir: &Path, name: &str, text: &str) -> Result<RunFolder, ExitCode> {
+    RunFolder::take(dir, &run_id(name, text), name).map_err(|e| {
+        eprintln!("error: {e:#}");
+        match e {
+            FolderError::Busy { .. } => ExitCode::from(2),
+            FolderError::Io(_) => ExitCode::from(1),
+        }
+    })
+}
+
 fn run_scene(
     scene: &Scene,
-    out: Option<PathBuf>,
+    dir: &Path,
     view: &View,
     stop: &AtomicBool,
 ) -> anyhow::Result<(String, StopReason)> {
-    let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&scene.name));
-    std::fs::create_dir_all(&dir)
-        .with_context(|| format!("cannot create output folder {}", dir.display()))?;
+    let dir = dir.to_owned();
     let mut csv = CsvObserver::new(&dir);
     let mut report = ReportObserver::new(&dir);
     let mut log = if view.file {

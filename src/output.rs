@@ -7,6 +7,7 @@
 pub mod compare;
 pub mod fields;
 pub mod folded;
+pub mod folder;
 pub mod inspect;
 pub mod summary;
 pub mod table;
@@ -93,7 +94,7 @@ impl CsvObserver {
     /// An observer writing `dir/samples.csv`.
     pub fn new(dir: &Path) -> Self {
         Self {
-            path: dir.join("samples.csv"),
+            path: dir.join(folder::SAMPLES),
             out: None,
         }
     }
@@ -135,29 +136,52 @@ impl Observer for CsvObserver {
     }
 }
 
-/// Writes `report.json` at the end of the run.
+/// Writes `report.json` at the end of the run: the [`RunReport`], the run's id and the
+/// stamp (size and hash) of the `samples.csv` beside it, if any (see [`folder`]). Put it
+/// after the CSV observer, which finishes `samples.csv` first.
 pub struct ReportObserver {
     path: PathBuf,
+    run_id: String,
 }
 
 impl ReportObserver {
     /// An observer writing `dir/report.json`.
     pub fn new(dir: &Path) -> Self {
         Self {
-            path: dir.join("report.json"),
+            path: dir.join(folder::REPORT),
+            run_id: String::new(),
         }
     }
 }
 
 impl Observer for ReportObserver {
-    fn observe_init(&mut self, _scene: &Scene) -> anyhow::Result<()> {
+    fn observe_init(&mut self, scene: &Scene) -> anyhow::Result<()> {
+        self.run_id = folder::run_id(&scene.name, &scene.source_text);
         remove_stale(&self.path)
     }
     fn observe_sample(&mut self, _sample: &Sample) -> anyhow::Result<()> {
         Ok(())
     }
     fn observe_final(&mut self, report: &RunReport) -> anyhow::Result<()> {
-        let mut text = serde_json::to_string_pretty(report)?;
+        /// `report.json`: the report, then the run's id and the files it was written with.
+        #[derive(serde::Serialize)]
+        struct Written<'a> {
+            #[serde(flatten)]
+            report: &'a RunReport,
+            run_id: &'a str,
+            files: std::collections::BTreeMap<&'static str, folder::FileStamp>,
+        }
+        let samples = self.path.with_file_name(folder::SAMPLES);
+        let mut files = std::collections::BTreeMap::new();
+        if samples.exists() {
+            files.insert(folder::SAMPLES, folder::FileStamp::of(&samples)?);
+        }
+        let written = Written {
+            report,
+            run_id: &self.run_id,
+            files,
+        };
+        let mut text = serde_json::to_string_pretty(&written)?;
         text.push('\n');
         write_atomic(&self.path, text.as_bytes())
     }

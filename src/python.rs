@@ -14,7 +14,7 @@ use pyo3::types::PyBytes;
 
 use crate::output::fields::fields;
 use crate::output::view::ViewObserver;
-use crate::output::{CsvObserver, ReportObserver};
+use crate::output::{CsvObserver, ReportObserver, folder};
 use crate::run::{Observer, RunReport, Sample, run_until};
 use crate::scene::Scene;
 use crate::scene::overrides::{Override, scene_file_with_overrides};
@@ -127,7 +127,9 @@ fn run_scene(
         let report = run_until(scene, &mut [&mut columns], stop)?;
         return Ok((columns, report));
     };
-    std::fs::create_dir_all(dir)?;
+    // The folder is the run's while it runs, as for `uncoil run` (`output::folder`).
+    let run_id = folder::run_id(&scene.name, &scene.source_text);
+    let _folder = folder::RunFolder::take(dir, &run_id, &scene.name)?;
     let mut csv = CsvObserver::new(dir);
     let mut report = ReportObserver::new(dir);
     let mut log = mcap.then(|| ViewObserver::new(dir));

@@ -580,8 +580,10 @@ fn unwritable_output_file_exits_1_without_a_complete_looking_file() {
         .assert()
         .code(1)
         .stdout(predicate::str::is_empty())
+        // The run takes the folder first and clears what an earlier run left: the folder
+        // in the way is named with what could not be done to it.
         .stderr(predicate::str::contains(format!(
-            "error: cannot create {}: Is a directory",
+            "error: cannot remove the earlier {}: Is a directory",
             out.join("samples.csv.partial").display()
         )));
     assert!(!out.join("samples.csv").exists());

@@ -4,6 +4,7 @@ mod bang;
 mod cli;
 mod errata;
 mod folded;
+mod folder;
 mod fuzz;
 mod hard;
 mod house;

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 
 use crate::output::table::Table;
-use crate::output::{CSV_COLUMNS, CsvObserver, ReportObserver};
+use crate::output::{CSV_COLUMNS, CsvObserver, ReportObserver, folder};
 use crate::run::limits::label;
 use crate::run::stop::{Status, StopReason};
 use crate::run::{Observer, RunReport, run};
@@ -117,8 +117,8 @@ pub fn check_scene(path: &Path, out_root: &Path) -> Case {
 }
 
 fn run_into(scene: &Scene, dir: &Path) -> anyhow::Result<RunReport> {
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("cannot create output folder {}", dir.display()))?;
+    let run_id = folder::run_id(&scene.name, &scene.source_text);
+    let _folder = folder::RunFolder::take(dir, &run_id, &scene.name)?;
     let mut csv = CsvObserver::new(dir);
     let mut json = ReportObserver::new(dir);
     let observers: &mut [&mut dyn Observer] = &mut [&mut csv, &mut json];
@@ -144,6 +144,7 @@ pub fn verify_outputs(dir: &Path) -> Vec<String> {
         Ok(text) => problems.extend(report_problem(&text)),
         Err(e) => problems.push(format!("report.json: {e}")),
     }
+    problems.extend(folder::mismatches(dir));
     problems
 }
 

@@ -1,7 +1,7 @@
 //! `run.mcap`: the view's file sink, the Foxglove SDK's MCAP writer.
 //!
 //! Metadata records: `scene` (name, file text), `tool` (name, version), `resolution`,
-//! `solver`, and at the end `run` (stop reason, steps, times) and `ledger`. No wall time goes
+//! `solver`, and at the end `run` (run id, stop reason, steps, times) and `ledger`. No wall time goes
 //! in, so a repeated run writes the same bytes.
 //!
 //! The file is written as `run.mcap.partial` and renamed when finished, so a file named
@@ -34,6 +34,8 @@ pub(super) const CHUNK_SIZE: u64 = 8 * 1024 * 1024;
 pub struct McapFile {
     path: PathBuf,
     handle: McapWriterHandle<BufWriter<File>>,
+    /// The run's id (`output::folder::run_id`), written into the `run` record.
+    run_id: String,
 }
 
 fn pairs(pairs: &[(&str, String)]) -> BTreeMap<String, String> {
@@ -128,6 +130,7 @@ impl McapFile {
         Ok(Self {
             path: path.to_owned(),
             handle,
+            run_id: crate::output::folder::run_id(&scene.name, &scene.source_text),
         })
     }
 
@@ -137,6 +140,7 @@ impl McapFile {
         self.handle.write_metadata(
             "run",
             pairs(&[
+                ("run_id", self.run_id.clone()),
                 ("stop_reason", report.stop.to_string()),
                 ("links", report.links.to_string()),
                 ("steps", report.steps.to_string()),
