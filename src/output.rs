@@ -67,7 +67,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 /// Removes a finished output left by an earlier run into the same folder, so that a run
 /// killed before it finishes leaves only `.partial` files, never an older complete-looking
 /// file beside them.
-pub(crate) fn remove_stale(path: &Path) -> anyhow::Result<()> {
+pub fn remove_stale(path: &Path) -> anyhow::Result<()> {
     match fs::remove_file(path) {
         Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
             Err(e).with_context(|| format!("cannot remove the earlier {}", path.display()))

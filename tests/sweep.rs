@@ -142,6 +142,31 @@ fn sweep_shards_merge_and_report() {
         deterministic(&t),
         "shards + merge differ from the full sweep"
     );
+    // A shard not given: refused, naming it, nothing written; written with --allow-partial,
+    // which says what is missing.
+    let partial = dir.path().join("partial");
+    uncoil()
+        .args(["sweep", "--merge"])
+        .arg(&s1)
+        .arg("--out")
+        .arg(&partial)
+        .assert()
+        .code(1)
+        .stderr(predicate::str::contains(
+            "shards missing: 2 of 2 (sweep.2-of-2.csv)",
+        ));
+    assert!(!partial.join("sweep.csv").exists());
+    uncoil()
+        .args(["sweep", "--merge"])
+        .arg(&s1)
+        .args(["--allow-partial", "--out"])
+        .arg(&partial)
+        .assert()
+        .success()
+        .stdout(predicate::str::contains("merged 1 runs into"))
+        .stdout(predicate::str::contains("shards missing: 2 of 2"));
+    let note = std::fs::read_to_string(partial.join("sweep.missing.txt")).unwrap();
+    assert!(note.contains("shards missing: 2 of 2"), "{note}");
     // A combination found twice is refused.
     uncoil()
         .args(["sweep", "--merge"])

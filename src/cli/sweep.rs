@@ -35,9 +35,15 @@ pub struct SweepArgs {
     /// No progress on stderr.
     #[arg(long)]
     quiet: bool,
-    /// Join shard files (sweep.K-of-N.csv) into OUT/sweep.csv instead of running.
+    /// Join shard files (sweep.K-of-N.csv) into OUT/sweep.csv instead of running. A shard
+    /// not given, a combination in no file or a file cut mid-row is an error (exit 1,
+    /// nothing written) unless --allow-partial.
     #[arg(long, num_args = 1.., value_name = "FILES", conflicts_with_all = ["scene", "vary", "shard", "jobs"])]
     merge: Vec<PathBuf>,
+    /// With --merge: write what the files hold even if some is missing, and say what is
+    /// missing on stdout and in OUT/sweep.missing.txt.
+    #[arg(long, requires = "merge")]
+    allow_partial: bool,
 }
 
 /// Which error a report uses.
@@ -109,25 +115,53 @@ fn folder_of(p: &Path) -> PathBuf {
         .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
 }
 
+/// `uncoil sweep --merge`: 0 merged (whole, or partial with `--allow-partial`), 1 a file
+/// could not be read or written, or something is missing without `--allow-partial`.
+fn merge_command(files: &[PathBuf], dir: &Path, allow_partial: bool) -> ExitCode {
+    let (table, missing) = match merge(files) {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            return ExitCode::from(1);
+        }
+    };
+    let note = dir.join("sweep.missing.txt");
+    if !missing.is_empty() && !allow_partial {
+        eprint!(
+            "error: the merge is incomplete, nothing written (--allow-partial to write it):\n{missing}"
+        );
+        return ExitCode::from(1);
+    }
+    let written = write_merged(&table, dir).and_then(|p| {
+        if missing.is_empty() {
+            uncoil::output::remove_stale(&note)?;
+        } else {
+            uncoil::output::write_atomic(&note, missing.to_string().as_bytes())?;
+        }
+        Ok(p)
+    });
+    match written {
+        Ok(p) => {
+            println!("merged {} runs into {}", table.rows.len(), p.display());
+            if !missing.is_empty() {
+                print!("partial, as {} says:\n{missing}", note.display());
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(1)
+        }
+    }
+}
+
 /// `uncoil sweep`: 0 every run ended, 1 a run failed or a file could not be written,
 /// 2 bad input (a combination's scene is invalid), 3 a guard stopped a run (and none
 /// failed).
 pub fn sweep(args: SweepArgs) -> ExitCode {
     if !args.merge.is_empty() {
         let dir = args.out.unwrap_or_else(|| folder_of(&args.merge[0]));
-        return match merge(&args.merge).and_then(|t| {
-            let rows = t.rows.len();
-            write_merged(&t, &dir).map(|p| (p, rows))
-        }) {
-            Ok((p, rows)) => {
-                println!("merged {rows} runs into {}", p.display());
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("error: {e:#}");
-                ExitCode::from(1)
-            }
-        };
+        return merge_command(&args.merge, &dir, args.allow_partial);
     }
     let scene_path = args.scene.expect("clap requires SCENE without --merge");
     let text = match std::fs::read_to_string(&scene_path) {

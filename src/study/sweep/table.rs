@@ -33,6 +33,21 @@ pub struct SweepTable {
 impl SweepTable {
     /// Reads a sweep (or any header-first) CSV file; a row of the wrong length is an error.
     pub fn read(path: &Path) -> anyhow::Result<Self> {
+        Self::read_rows(path, false).map(|(t, _)| t)
+    }
+
+    /// Reads a sweep file whose writer may have been killed mid-row: a last row without its
+    /// newline is left out, and the second value says so.
+    pub fn read_cut(path: &Path) -> anyhow::Result<(Self, bool)> {
+        Self::read_rows(path, true)
+    }
+
+    fn read_rows(path: &Path, allow_cut: bool) -> anyhow::Result<(Self, bool)> {
+        let unterminated = allow_cut
+            && std::fs::read(path)
+                .with_context(|| format!("cannot read {}", path.display()))?
+                .last()
+                .is_some_and(|&b| b != b'\n');
         let mut reader = csv::ReaderBuilder::new()
             .flexible(true)
             .from_path(path)
@@ -45,9 +60,19 @@ impl SweepTable {
             .collect();
         anyhow::ensure!(!header.is_empty(), "{} is empty", path.display());
         let mut rows = Vec::new();
-        for record in reader.records() {
-            let record = record.with_context(|| format!("cannot read {}", path.display()))?;
+        let records: Vec<csv::StringRecord> = reader
+            .records()
+            .collect::<Result<_, _>>()
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        let last = records.len();
+        let mut cut = false;
+        for (n, record) in records.into_iter().enumerate() {
             let row: Vec<String> = record.iter().map(str::to_owned).collect();
+            // Every row is written with its newline at once: a last row without one is cut.
+            if unterminated && n + 1 == last {
+                cut = true;
+                break;
+            }
             anyhow::ensure!(
                 row.len() == header.len(),
                 "{} line {}: {} cells, the header has {}",
@@ -58,7 +83,7 @@ impl SweepTable {
             );
             rows.push(row);
         }
-        Ok(Self { header, rows })
+        Ok((Self { header, rows }, cut))
     }
 
     /// The index of column `name`.
@@ -100,15 +125,91 @@ impl SweepTable {
     }
 }
 
-/// Joins shard files into one table sorted by `index`. Every file must have the same
-/// header; an index found twice is an error (a shard run twice, or the same file given
-/// twice).
-pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<SweepTable> {
+/// What a merge found missing: the shards not given (their `K` of `N`, read from the files'
+/// names `sweep.K-of-N.csv`), the combinations below the largest index that no file holds,
+/// and the files cut mid-row (their complete rows kept). A combination after the last one
+/// any given shard ran cannot be seen: the files do not hold the grid's size.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Missing {
+    /// `N`, and the shards `K` of it not given.
+    pub shards: Option<(usize, Vec<usize>)>,
+    /// Combinations no file holds.
+    pub combinations: Vec<usize>,
+    /// Each file cut mid-row, with its complete rows.
+    pub cut: Vec<(PathBuf, usize)>,
+}
+
+impl Missing {
+    /// Whether nothing is missing.
+    pub fn is_empty(&self) -> bool {
+        self.shards.as_ref().is_none_or(|(_, k)| k.is_empty())
+            && self.combinations.is_empty()
+            && self.cut.is_empty()
+    }
+}
+
+impl std::fmt::Display for Missing {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let list = |v: &[usize]| {
+            v.iter()
+                .map(ToString::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        if let Some((n, ks)) = &self.shards
+            && !ks.is_empty()
+        {
+            let names: Vec<String> = ks.iter().map(|&k| file_name(Shard { k, n: *n })).collect();
+            writeln!(
+                f,
+                "shards missing: {} of {n} ({})",
+                list(ks),
+                names.join(", ")
+            )?;
+        }
+        if !self.combinations.is_empty() {
+            writeln!(f, "combinations in no file: {}", list(&self.combinations))?;
+        }
+        for (path, rows) in &self.cut {
+            writeln!(
+                f,
+                "{} is cut mid-row: its {rows} complete rows are kept",
+                path.display()
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// `K` and `N` of a shard file's name, `sweep.K-of-N.csv`.
+fn shard_of(path: &Path) -> Option<Shard> {
+    let name = path.file_name()?.to_str()?;
+    let (k, n) = name
+        .strip_prefix("sweep.")?
+        .strip_suffix(".csv")?
+        .split_once("-of-")?;
+    Some(Shard {
+        k: k.parse().ok()?,
+        n: n.parse().ok()?,
+    })
+}
+
+/// Joins shard files into one table sorted by `index`, and says what is missing (see
+/// [`Missing`]). Every file must have the same header; an index found twice is an error (a
+/// shard run twice, or the same file given twice), as is an index that is not its file's
+/// shard's or shard files of different `N`. A file's last row cut short (its writer killed
+/// mid-row) is left out and reported.
+pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<(SweepTable, Missing)> {
     anyhow::ensure!(!inputs.is_empty(), "nothing to merge");
     let mut merged: Option<SweepTable> = None;
     let mut seen: BTreeMap<usize, PathBuf> = BTreeMap::new();
+    let mut missing = Missing::default();
+    let mut shards: BTreeMap<usize, usize> = BTreeMap::new();
     for path in inputs {
-        let t = SweepTable::read(path)?;
+        let (t, cut) = SweepTable::read_cut(path)?;
+        if cut {
+            missing.cut.push((path.clone(), t.rows.len()));
+        }
         let ic = t
             .column(INDEX_COLUMN)
             .with_context(|| format!("{}: no `{INDEX_COLUMN}` column", path.display()))?;
@@ -120,10 +221,23 @@ pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<SweepTable> {
                 inputs[0].display()
             );
         }
+        let shard = shard_of(path);
+        if let Some(s) = shard {
+            shards.insert(s.k, s.n);
+        }
         for r in &t.rows {
             let i: usize = r[ic].parse().with_context(|| {
                 format!("{}: `{}` is not a combination index", path.display(), r[ic])
             })?;
+            if let Some(s) = shard {
+                anyhow::ensure!(
+                    s.contains(i),
+                    "{}: combination {i} is not in shard {} of {}",
+                    path.display(),
+                    s.k,
+                    s.n
+                );
+            }
             if let Some(first) = seen.insert(i, path.clone()) {
                 anyhow::bail!(
                     "combination {i} is in both {} and {}",
@@ -137,11 +251,27 @@ pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<SweepTable> {
             Some(m) => m.rows.extend(t.rows),
         }
     }
+    let ns: std::collections::BTreeSet<usize> = shards.values().copied().collect();
+    anyhow::ensure!(
+        ns.len() <= 1,
+        "the files are shards of different splits (of {})",
+        ns.iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+            .join(", of ")
+    );
+    if let Some(&n) = ns.first() {
+        let absent = (1..=n).filter(|k| !shards.contains_key(k)).collect();
+        missing.shards = Some((n, absent));
+    }
+    if let Some(&last) = seen.keys().next_back() {
+        missing.combinations = (0..last).filter(|i| !seen.contains_key(i)).collect();
+    }
     let mut m = merged.expect("at least one input");
     let ic = m.column(INDEX_COLUMN).expect("checked above");
     m.rows
         .sort_by_key(|r| r[ic].parse::<usize>().unwrap_or(usize::MAX));
-    Ok(m)
+    Ok((m, missing))
 }
 /// Writes a merged table to `dir/sweep.csv` (atomically) and returns the path.
 pub fn write_merged(table: &SweepTable, dir: &Path) -> anyhow::Result<PathBuf> {
@@ -181,7 +311,8 @@ mod tests {
         let d = dir.path();
         let a = write(d, "a.csv", "index,k,status\n2,x,ok\n0,y,\"failed: a, b\"\n");
         let b = write(d, "b.csv", "index,k,status\n1,z,ok\n");
-        let m = merge(&[a.clone(), b.clone()]).unwrap();
+        let (m, missing) = merge(&[a.clone(), b.clone()]).unwrap();
+        assert!(missing.is_empty(), "{missing}");
         let idx: Vec<&str> = m.rows.iter().map(|r| r[0].as_str()).collect();
         assert_eq!(idx, ["0", "1", "2"]);
         assert_eq!(m.rows[0][2], "failed: a, b");
@@ -196,5 +327,31 @@ mod tests {
         let short = write(d, "d.csv", "index,k,status\n4,z\n");
         let e = merge(&[short]).unwrap_err().to_string();
         assert!(e.contains("line 2: 2 cells, the header has 3"), "{e}");
+    }
+
+    #[test]
+    fn merge_names_missing_shards_gaps_and_cut_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let one = write(d, "sweep.1-of-3.csv", "index,k,status\n0,a,ok\n3,b,ok\n");
+        let three = write(d, "sweep.3-of-3.csv", "index,k,status\n2,c,ok\n5,d,o");
+        let (m, missing) = merge(&[one.clone(), three.clone()]).unwrap();
+        assert_eq!(m.rows.len(), 3);
+        assert_eq!(missing.shards, Some((3, vec![2])));
+        assert_eq!(missing.combinations, [1]);
+        assert_eq!(missing.cut, [(three.clone(), 1)]);
+        let text = missing.to_string();
+        assert!(
+            text.contains("shards missing: 2 of 3 (sweep.2-of-3.csv)"),
+            "{text}"
+        );
+        assert!(
+            text.contains("is cut mid-row: its 1 complete rows are kept"),
+            "{text}"
+        );
+        // An index that is not its file's shard's.
+        let wrong = write(d, "sweep.2-of-3.csv", "index,k,status\n2,e,ok\n");
+        let e = merge(&[one, wrong]).unwrap_err().to_string();
+        assert!(e.contains("combination 2 is not in shard 2 of 3"), "{e}");
     }
 }
