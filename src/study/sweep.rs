@@ -28,7 +28,7 @@ pub use self::grid::{Combination, CombinationError, Shard, Vary, file_name, grid
 pub use self::row::{
     BANG_COLUMNS, INDEX_COLUMN, RowStatus, STATUS_COLUMN, header, result_cells, result_columns,
 };
-pub use self::table::{SweepTable, csv_line, merge, write_merged};
+pub use self::table::{Missing, SweepTable, csv_line, merge, write_merged};
 
 use self::grid::settings;
 use self::row::one_line;
