@@ -142,6 +142,24 @@ fn sweep_shards_merge_and_report() {
         deterministic(&t),
         "shards + merge differ from the full sweep"
     );
+    // A sweep killed while writing its last row, then resumed: that run goes again, the
+    // other is kept, and the table is the uninterrupted one's.
+    let resumed = dir.path().join("resumed");
+    std::fs::create_dir_all(&resumed).unwrap();
+    let text = std::fs::read_to_string(full.join("sweep.csv")).unwrap();
+    let cut = &text.trim_end()[..text.trim_end().len() - 5];
+    std::fs::write(resumed.join("sweep.csv"), cut).unwrap();
+    sweep(&resumed, &["--quiet", "--resume"])
+        .success()
+        .stdout(predicate::str::contains(
+            "1 runs (0 failed, 0 stopped by a guard, 1 kept from before) of 2 combinations",
+        ));
+    let again = SweepTable::read(&resumed.join("sweep.csv")).unwrap();
+    assert_eq!(
+        deterministic(&again),
+        deterministic(&t),
+        "a resumed sweep differs from the uninterrupted one"
+    );
     // A shard not given: refused, naming it, nothing written; written with --allow-partial,
     // which says what is missing.
     let partial = dir.path().join("partial");

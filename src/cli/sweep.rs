@@ -35,6 +35,11 @@ pub struct SweepArgs {
     /// No progress on stderr.
     #[arg(long)]
     quiet: bool,
+    /// Keep the rows of this shard's existing file whose run ended by itself (ok, max_time,
+    /// stopped) and run only the rest (interrupted, failed, or missing): a task that hit its
+    /// time limit goes on where it stopped.
+    #[arg(long)]
+    resume: bool,
     /// Join shard files (sweep.K-of-N.csv) into OUT/sweep.csv instead of running. A shard
     /// not given, a combination in no file or a file cut mid-row is an error (exit 1,
     /// nothing written) unless --allow-partial.
@@ -192,6 +197,7 @@ pub fn sweep(args: SweepArgs) -> ExitCode {
         shard: args.shard.unwrap_or(Shard::ALL),
         jobs: args.jobs,
         progress: !args.quiet,
+        resume: args.resume,
         ..SweepOptions::default()
     };
     eprintln!(
@@ -207,8 +213,13 @@ pub fn sweep(args: SweepArgs) -> ExitCode {
     );
     match sweep.run(&dir, &opts) {
         Ok(o) => {
+            let kept = if o.kept > 0 {
+                format!(", {} kept from before", o.kept)
+            } else {
+                String::new()
+            };
             println!(
-                "{} runs ({} failed, {} stopped by a guard) of {} combinations written to {}",
+                "{} runs ({} failed, {} stopped by a guard{kept}) of {} combinations written to {}",
                 o.runs,
                 o.failed,
                 o.stopped,

@@ -12,6 +12,7 @@ mod grid;
 mod row;
 mod table;
 
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::fs::File;
 use std::io::{IsTerminal, Write};
@@ -44,6 +45,8 @@ pub struct SweepOutcome {
     pub grid: usize,
     /// Runs in this shard.
     pub runs: usize,
+    /// Rows kept from the shard's file by `--resume` (not run again).
+    pub kept: usize,
     /// Runs whose status is `failed: ...`.
     pub failed: usize,
     /// Runs a guard stopped (`stopped: ...`).
@@ -62,6 +65,10 @@ pub struct SweepOptions {
     /// Once set, runs that have not started are skipped and running ones stop (status
     /// `interrupted`).
     pub stop: Arc<AtomicBool>,
+    /// Keep the rows of this shard's existing file whose run ended by itself (`ok`,
+    /// `max_time`, `stopped: ...`: a rerun would give the same, the runs being
+    /// deterministic) and run only the others (`interrupted`, `failed: ...`, or no row).
+    pub resume: bool,
 }
 
 impl Default for SweepOptions {
@@ -71,6 +78,7 @@ impl Default for SweepOptions {
             jobs: None,
             progress: true,
             stop: Arc::new(AtomicBool::new(false)),
+            resume: false,
         }
     }
 }
@@ -115,10 +123,15 @@ impl Sweep {
             .map(|(l, _)| l.to_string())
             .collect();
         let header = header(&self.keys, &labels);
-        let file = start_file(&path, &header)?;
+        let kept = if opts.resume && path.exists() {
+            finished_rows(&path, &header)?
+        } else {
+            BTreeMap::new()
+        };
+        let file = start_file(&path, &header, kept.values())?;
 
         let mine: Vec<usize> = (0..self.combos.len())
-            .filter(|&i| opts.shard.contains(i))
+            .filter(|&i| opts.shard.contains(i) && !kept.contains_key(&i))
             .collect();
         let pool = worker_pool(opts.jobs)?;
         let runner = Runner {
@@ -151,19 +164,55 @@ impl Sweep {
             path,
             grid: self.combos.len(),
             runs: mine.len(),
+            kept: kept.len(),
             failed: failed.into_inner().expect("no panic holds the lock"),
             stopped: stopped.into_inner().expect("no panic holds the lock"),
         })
     }
 }
 
-/// Creates `path` and writes the header line, flushed.
-fn start_file(path: &Path, header: &[String]) -> anyhow::Result<File> {
+/// Creates `path` and writes the header line and the `kept` rows, flushed.
+fn start_file<'a>(
+    path: &Path,
+    header: &[String],
+    kept: impl Iterator<Item = &'a Vec<String>>,
+) -> anyhow::Result<File> {
     let mut file =
         File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    writeln!(file, "{}", csv_line(header))?;
-    file.flush()?;
+    let mut text = csv_line(header) + "\n";
+    for row in kept {
+        text.push_str(&csv_line(row));
+        text.push('\n');
+    }
+    file.write_all(text.as_bytes())
+        .and_then(|()| file.flush())
+        .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(file)
+}
+
+/// The rows of the shard file at `path` whose run ended by itself, by combination index (a
+/// last row cut mid-row is left out). The file must be of this sweep: its header `header`.
+fn finished_rows(path: &Path, header: &[String]) -> anyhow::Result<BTreeMap<usize, Vec<String>>> {
+    let (table, _) = SweepTable::read_cut(path)?;
+    anyhow::ensure!(
+        table.header == header,
+        "{}: its columns are not this sweep's: it cannot be resumed (remove it to start again)",
+        path.display()
+    );
+    let status = table.column(STATUS_COLUMN).expect("the header has it");
+    Ok(table
+        .rows
+        .into_iter()
+        .filter(|r| {
+            r[status].parse::<RowStatus>().is_ok_and(|s| {
+                matches!(
+                    s,
+                    RowStatus::Ok | RowStatus::MaxTime | RowStatus::Stopped(_)
+                )
+            })
+        })
+        .filter_map(|r| Some((r[0].parse().ok()?, r)))
+        .collect())
 }
 
 /// The worker threads: `jobs` of them, or one per core.
