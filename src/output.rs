@@ -107,7 +107,8 @@ impl Observer for CsvObserver {
         let file =
             File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
         let mut out = csv::Writer::from_writer(file);
-        out.write_record(CSV_COLUMNS.iter())?;
+        out.write_record(CSV_COLUMNS.iter())
+            .with_context(|| format!("cannot write {}", tmp.display()))?;
         self.out = Some(out);
         Ok(())
     }
@@ -116,7 +117,8 @@ impl Observer for CsvObserver {
         let Some(out) = self.out.as_mut() else {
             return Ok(());
         };
-        out.write_record(sample_cells(sample)?)?;
+        out.write_record(sample_cells(sample)?)
+            .with_context(|| format!("cannot write {}", partial_path(&self.path).display()))?;
         Ok(())
     }
 
