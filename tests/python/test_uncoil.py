@@ -114,6 +114,24 @@ def test_a_shipped_scene_runs_by_name_from_any_folder(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_folder_another_run_is_writing_is_refused(tmp_path):
+    out = tmp_path / "run"
+    first = threading.Thread(
+        target=uncoil.run, args=(THIN,), kwargs={"overrides": {"stop.max_time_s": 5}, "out": out}
+    )
+    first.start()
+    lock = out / ".uncoil.lock"
+    deadline = time.monotonic() + 10
+    while not (lock.exists() and lock.read_text()) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    try:
+        with pytest.raises(Exception, match="is being written by another run"):
+            uncoil.run(YOGA, out=out)
+    finally:
+        first.join()
+    assert json.loads((out / "report.json").read_text())["scene"]["name"] == "thin-tape"
+
+
 def test_scene_error_is_raised_as_uncoil_scene_error():
     assert uncoil.SceneError.__module__ == "uncoil"
     with pytest.raises(uncoil.SceneError, match="a shipped scene can be named instead: yoga-mat"):
