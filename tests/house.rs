@@ -5,7 +5,7 @@
 //! `cargo test --test integration house -- --nocapture` prints the longest functions and
 //! files.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
 use std::path::{Path, PathBuf};
 
@@ -210,4 +210,113 @@ fn the_function_reader_measures_from_fn_to_its_brace() {
         functions(text),
         [("a".to_string(), 1, 3), ("b".to_string(), 5, 5)]
     );
+}
+
+/// The module path of a file under `src/` (`src/run/guard.rs` is `run::guard`, `src/run.rs`
+/// is `run`); `None` for the crate roots.
+fn module_of(src: &Path, file: &Path) -> Option<String> {
+    let rel = file.strip_prefix(src).ok()?.with_extension("");
+    let parts: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    if parts.len() == 1 && (parts[0] == "lib" || parts[0] == "main") {
+        return None;
+    }
+    Some(parts.join("::"))
+}
+
+/// The module paths `text` (the file of module `own`) names: `crate::a::b::...` and
+/// `super::x::...`, each cut to the longest prefix that is one of `modules`.
+fn named_modules(text: &str, own: &str, modules: &BTreeSet<String>) -> BTreeSet<String> {
+    let parent = own.rsplit_once("::").map_or("", |(p, _)| p);
+    let mut found = BTreeSet::new();
+    for (prefix, base) in [("crate::", ""), ("super::", parent)] {
+        for (i, _) in text.match_indices(prefix) {
+            let before = text[..i].chars().next_back();
+            if before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == ':') {
+                continue;
+            }
+            let rest: String = text[i + prefix.len()..]
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == ':')
+                .collect();
+            let mut path: Vec<&str> = if base.is_empty() {
+                vec![]
+            } else {
+                base.split("::").collect()
+            };
+            path.extend(rest.split("::").filter(|p| !p.is_empty()));
+            while !path.is_empty() {
+                let candidate = path.join("::");
+                if modules.contains(&candidate) {
+                    found.insert(candidate);
+                    break;
+                }
+                path.pop();
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn no_two_files_use_each_other() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    let modules: BTreeMap<String, PathBuf> = files
+        .iter()
+        .filter_map(|f| Some((module_of(&src, f)?, f.clone())))
+        .collect();
+    let names: BTreeSet<String> = modules.keys().cloned().collect();
+    let uses: BTreeMap<&String, BTreeSet<String>> = modules
+        .iter()
+        .map(|(m, f)| {
+            let text = fs::read_to_string(f).unwrap();
+            // The code that uses: not the unit tests (which may use anything) and not the
+            // comments (a "see also" link each way is no knot).
+            let code: String = text
+                .split("\n#[cfg(test)]\nmod tests")
+                .next()
+                .unwrap_or(&text)
+                .lines()
+                .filter(|l| !l.trim_start().starts_with("//"))
+                .collect::<Vec<_>>()
+                .join("\n");
+            (m, named_modules(&code, m, &names))
+        })
+        .collect();
+    // A parent names its children to declare them: only a pair of files neither of which is
+    // the other's module counts.
+    let related =
+        |a: &str, b: &str| a.starts_with(&format!("{b}::")) || b.starts_with(&format!("{a}::"));
+    let mut circles = Vec::new();
+    for (a, used) in &uses {
+        for b in used {
+            if a.as_str() < b.as_str()
+                && !related(a, b)
+                && uses.get(b).is_some_and(|back| back.contains(a.as_str()))
+            {
+                circles.push(format!("{a} <-> {b}"));
+            }
+        }
+    }
+    assert!(
+        circles.is_empty(),
+        "files that use each other (move what both need to one of them, or a third):\n{}",
+        circles.join("\n")
+    );
+}
+
+#[test]
+fn the_module_reader_resolves_crate_and_super_paths() {
+    let modules: BTreeSet<String> = ["run", "run::stop", "run::guard", "scene"]
+        .map(String::from)
+        .into();
+    let text = "use crate::run::stop::{A, B};\nuse super::guard::X;\n/// [`S`](crate::scene::S)";
+    let found: Vec<String> = named_modules(text, "run::limits", &modules)
+        .into_iter()
+        .collect();
+    assert_eq!(found, ["run::guard", "run::stop", "scene"]);
 }

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use crate::output::compare::paradox;
 use crate::run::RunReport;
-use crate::run::milestones::MilestoneKey;
+use crate::run::report::MilestoneKey;
 use crate::run::stop::Status;
 use crate::theory::rivals::Case;
 

@@ -6,10 +6,11 @@
 //! The bounds are stated here and copied into `report.json` (`bounds`), so a reader of a
 //! report knows what "stopped" was measured against.
 
+use std::fmt;
+
 use serde::{Deserialize, Serialize};
 
 use crate::model::{Health, Observation};
-use crate::run::stop::{GuardKind, GuardTrip};
 use crate::scene::Scene;
 use crate::spiral::Spiral;
 
@@ -182,6 +183,90 @@ fn non_finite(obs: &Observation, health: &Health) -> Option<&'static str> {
         return Some("the contact slip speed");
     }
     None
+}
+
+/// Which guard stopped a run.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum GuardKind {
+    /// A quantity of the state is not finite (its name); value and bound are 0.
+    NonFinite(String),
+    /// The total energy rose above E0 by more than the bound (J).
+    EnergyRise,
+    /// A joint separated by more than the bound (m).
+    JointGap,
+    /// A body sank into the floor deeper than the bound (m).
+    Penetration,
+    /// A body's centre of mass fell below the floor by more than the bound (m); the value
+    /// is its height.
+    FellThrough,
+    /// A body went farther from the start of the tape than the bound (m).
+    LeftWorld,
+}
+
+/// A guard's verdict: which guard, when, the value it measured and its bound.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GuardTrip {
+    /// The guard.
+    pub guard: GuardKind,
+    /// When it tripped (s).
+    pub t_s: f64,
+    /// The value it measured, in the bound's unit.
+    pub value: f64,
+    /// Its bound.
+    pub bound: f64,
+}
+
+impl GuardTrip {
+    /// A short name of the guard, for tables and a sweep's status.
+    pub fn name(&self) -> &'static str {
+        match self.guard {
+            GuardKind::NonFinite(_) => "non-finite",
+            GuardKind::EnergyRise => "energy-rise",
+            GuardKind::JointGap => "joint-gap",
+            GuardKind::Penetration => "penetration",
+            GuardKind::FellThrough => "fell-through",
+            GuardKind::LeftWorld => "left-world",
+        }
+    }
+}
+
+impl fmt::Display for GuardTrip {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let (t, v, b) = (self.t_s, self.value, self.bound);
+        match &self.guard {
+            GuardKind::NonFinite(name) => {
+                write!(f, "blow-up at t = {t:.6} s: {name} is not finite")
+            }
+            GuardKind::EnergyRise => write!(
+                f,
+                "energy rising at t = {t:.6} s: E - E0 = {v:.4e} J, above the bound {b:.4e} J \
+                 ({} % of the energy scale: the largest of |E0|, M g R, M g L sin(slope))",
+                100.0 * ENERGY_RISE_TOLERANCE
+            ),
+            GuardKind::JointGap => write!(
+                f,
+                "joints separating at t = {t:.6} s: gap {v:.4e} m, above the bound {b:.4e} m \
+                 (the larger of {JOINT_GAP_PER_THICKNESS} b and {} % of the outermost link)",
+                100.0 * JOINT_GAP_PER_LINK
+            ),
+            GuardKind::Penetration => write!(
+                f,
+                "floor penetration at t = {t:.6} s: {v:.4e} m, above the bound {b:.4e} m \
+                 ({PENETRATION_PER_RADIUS} R)"
+            ),
+            GuardKind::FellThrough => write!(
+                f,
+                "a body fell through the floor at t = {t:.6} s: centre of mass at y = {v:.4e} m, \
+                 below the bound -{b:.4e} m ({PENETRATION_PER_RADIUS} R)"
+            ),
+            GuardKind::LeftWorld => write!(
+                f,
+                "a body left the world at t = {t:.6} s: {v:.4e} m from the start, beyond the \
+                 bound {b:.4e} m"
+            ),
+        }
+    }
 }
 
 #[cfg(test)]

@@ -2,40 +2,13 @@
 //! and 2b; a spool at laid fractions), when the simulation crossed each, and the
 //! references' times there.
 
-use std::fmt;
-
-use serde::{Deserialize, Serialize};
-
 use crate::model::Observation;
-use crate::run::report::{Milestone, RivalTimes};
+use crate::run::report::{Milestone, MilestoneKey, RivalTimes};
 use crate::scene::Scene;
 use crate::theory::References;
 
 /// Laid fractions of the milestones of a spool (a scene with a core).
 pub const SPOOL_FRACTIONS: [f64; 4] = [0.25, 0.5, 0.75, 0.9];
-
-/// Which milestone a time is taken at; its text is its label (`0.5R`, `2b`, `f=0.25`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum MilestoneKey {
-    /// The equivalent radius at this fraction of the outer radius R (`0.5R`).
-    OfRadius(f64),
-    /// Two thicknesses, `r = 2b` (`2b`): the last milestone before the bang.
-    TwoB,
-    /// A spool's laid fraction (`f=0.25`).
-    Laid(f64),
-}
-
-impl fmt::Display for MilestoneKey {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let label = match self {
-            Self::OfRadius(k) => format!("{k}R"),
-            Self::TwoB => "2b".to_owned(),
-            Self::Laid(x) => format!("f={x}"),
-        };
-        f.pad(&label)
-    }
-}
 
 /// The milestone radii of a scene with their keys.
 pub fn milestone_radii(scene: &Scene) -> Vec<(MilestoneKey, f64)> {

@@ -2,15 +2,39 @@
 //! the final bang's observables and the approach to it. Plain data for JSON, the summary
 //! and the tables; built by the loop at the run's end.
 
+use std::fmt;
+
 use serde::{Deserialize, Serialize};
 
 use crate::model::{BangEnd, EnergyLedger};
 use crate::run::guard::Bounds;
 use crate::run::limits::ReferenceLimit;
-use crate::run::milestones::MilestoneKey;
 use crate::run::stop::StopReason;
 use crate::scene::Scene;
 use crate::theory::References;
+
+/// Which milestone a time is taken at; its text is its label (`0.5R`, `2b`, `f=0.25`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MilestoneKey {
+    /// The equivalent radius at this fraction of the outer radius R (`0.5R`).
+    OfRadius(f64),
+    /// Two thicknesses, `r = 2b` (`2b`): the last milestone before the bang.
+    TwoB,
+    /// A spool's laid fraction (`f=0.25`).
+    Laid(f64),
+}
+
+impl fmt::Display for MilestoneKey {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let label = match self {
+            Self::OfRadius(k) => format!("{k}R"),
+            Self::TwoB => "2b".to_owned(),
+            Self::Laid(x) => format!("f={x}"),
+        };
+        f.pad(&label)
+    }
+}
 
 /// One milestone: the coil at a given continuum-equivalent radius.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -9,12 +9,13 @@ use crate::model::{BangEnd, Model, Observation, Phase};
 use crate::run::Observer;
 use crate::run::force_window::ForceWindow;
 use crate::run::frame::{Event, Frame, GhostDisc, GhostSpiral, SpiralGrid};
+use crate::run::guard::GuardTrip;
 use crate::run::guard::{self, Guard};
 use crate::run::limits::Applicability;
 use crate::run::milestones::Milestones;
 use crate::run::report::{Approach, BangReport, Ledger, RunReport};
 use crate::run::sample::{make_sample, set_forces};
-use crate::run::stop::{GuardTrip, StopReason};
+use crate::run::stop::StopReason;
 use crate::scene::Scene;
 use crate::theory::References;
 

@@ -6,7 +6,7 @@ use std::str::FromStr;
 
 use crate::run::RunReport;
 use crate::run::limits::LimitKind;
-use crate::run::milestones::MilestoneKey;
+use crate::run::report::MilestoneKey;
 use crate::run::stop::StopReason;
 
 /// The first column of `sweep.csv`: the combination's place in the full grid (0-based,
