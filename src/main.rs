@@ -102,9 +102,12 @@ enum Command {
 }
 
 mod cli {
-    //! The subcommands that are more than a call into the library.
+    //! The subcommands that are more than a call into the library, and the exit codes.
+    pub mod exit;
     pub mod sweep;
 }
+
+use cli::exit::Exit;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -117,21 +120,21 @@ fn main() -> ExitCode {
                 for f in files {
                     println!("wrote {}", f.display());
                 }
-                ExitCode::SUCCESS
+                Exit::Ok.into()
             }
             Err(e) => {
                 eprintln!("error: {e:#}");
-                ExitCode::from(1)
+                Exit::Failed.into()
             }
         },
         Command::Inspect { file } => match uncoil::output::inspect::read_inventory(&file) {
             Ok(inv) => {
                 print!("{}", uncoil::output::inspect::describe(&file, &inv));
-                ExitCode::SUCCESS
+                Exit::Ok.into()
             }
             Err(e) => {
                 eprintln!("error: {e:#}");
-                ExitCode::from(1)
+                Exit::Failed.into()
             }
         },
         Command::Run {
@@ -152,7 +155,7 @@ fn main() -> ExitCode {
                 Ok(AnyScene::FoldedChain(chain)) => run_chain_command(&chain, out, &view),
                 Err(e) => {
                     eprintln!("error: {e}");
-                    ExitCode::from(2)
+                    Exit::BadInput.into()
                 }
             }
         }
@@ -172,20 +175,17 @@ fn run_command(scene: &Scene, out: Option<PathBuf>, view: &View) -> ExitCode {
         Ok((text, end)) => {
             print!("{text}");
             match end.status() {
-                Status::Completed => ExitCode::SUCCESS,
+                Status::Completed => {}
                 Status::Interrupted => {
                     eprintln!("interrupted: the outputs end at the last step taken");
-                    ExitCode::from(130)
                 }
-                Status::Stopped => {
-                    eprintln!("error: the run was stopped by a guard: {end}");
-                    ExitCode::from(3)
-                }
+                Status::Stopped => eprintln!("error: the run was stopped by a guard: {end}"),
             }
+            Exit::of(end.status()).into()
         }
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::from(1)
+            Exit::Failed.into()
         }
     }
 }
@@ -194,7 +194,7 @@ fn run_command(scene: &Scene, out: Option<PathBuf>, view: &View) -> ExitCode {
 fn run_chain_command(chain: &FoldedChain, out: Option<PathBuf>, view: &View) -> ExitCode {
     if view.live.is_some() {
         eprintln!("error: --live: a folded chain has no Foxglove view");
-        return ExitCode::from(2);
+        return Exit::BadInput.into();
     }
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&chain.name));
     let _folder = match take_folder(&dir, &chain.name, &chain.source_text) {
@@ -208,14 +208,14 @@ fn run_chain_command(chain: &FoldedChain, out: Option<PathBuf>, view: &View) -> 
             print!("{}", chain_summary(chain, &report));
             println!("Wrote {0}/samples.csv and {0}/report.json", dir.display());
             match report.end {
-                ChainEnd::Interrupted => ExitCode::from(130),
-                ChainEnd::NotFinite => ExitCode::from(3),
-                _ => ExitCode::SUCCESS,
+                ChainEnd::Interrupted => Exit::Interrupted.into(),
+                ChainEnd::NotFinite => Exit::Stopped.into(),
+                _ => Exit::Ok.into(),
             }
         }
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::from(1)
+            Exit::Failed.into()
         }
     }
 }
@@ -229,7 +229,7 @@ fn stop_flag() -> Arc<AtomicBool> {
     // the process at once.
     let handler = ctrlc::set_handler(move || {
         if flag.swap(true, Ordering::SeqCst) {
-            std::process::exit(130);
+            std::process::exit(Exit::Interrupted.code().into());
         }
     });
     if let Err(e) = handler {
@@ -250,20 +250,20 @@ fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> ExitCode {
                 "{}: the files are sound and belong to one run",
                 dir.display()
             );
-            return ExitCode::SUCCESS;
+            return Exit::Ok.into();
         }
-        return ExitCode::from(1);
+        return Exit::Failed.into();
     }
     let out = out.unwrap_or_else(|| PathBuf::from("runs/check"));
     let files = match check::scene_files(&dir) {
         Ok(f) if f.is_empty() => {
             eprintln!("error: no scene files (*.toml) in {}", dir.display());
-            return ExitCode::from(2);
+            return Exit::BadInput.into();
         }
         Ok(f) => f,
         Err(e) => {
             eprintln!("error: {e:#}");
-            return ExitCode::from(2);
+            return Exit::BadInput.into();
         }
     };
     let mut cases = Vec::new();
@@ -275,9 +275,9 @@ fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> ExitCode {
     }
     print!("{}", check::table(&cases));
     if cases.iter().all(check::Case::passed) {
-        ExitCode::SUCCESS
+        Exit::Ok.into()
     } else {
-        ExitCode::from(1)
+        Exit::Failed.into()
     }
 }
 
@@ -290,7 +290,7 @@ fn compare(paths: &[PathBuf]) -> ExitCode {
             Ok(s) => scenes.push(s),
             Err(e) => {
                 eprintln!("error: {e}");
-                return ExitCode::from(2);
+                return Exit::BadInput.into();
             }
         }
     }
@@ -301,11 +301,11 @@ fn compare(paths: &[PathBuf]) -> ExitCode {
             Ok(report) => println!("{}", table(&report, &log.samples)),
             Err(e) => {
                 eprintln!("error: {e:#}");
-                return ExitCode::from(1);
+                return Exit::Failed.into();
             }
         }
     }
-    ExitCode::SUCCESS
+    Exit::Ok.into()
 }
 
 /// What of a run Foxglove sees.
@@ -364,8 +364,8 @@ fn take_folder(dir: &Path, name: &str, text: &str) -> Result<RunFolder, ExitCode
     RunFolder::take(dir, &run_id(name, text), name).map_err(|e| {
         eprintln!("error: {e:#}");
         match e {
-            FolderError::Busy { .. } => ExitCode::from(2),
-            FolderError::Io(_) => ExitCode::from(1),
+            FolderError::Busy { .. } => Exit::BadInput.into(),
+            FolderError::Io(_) => Exit::Failed.into(),
         }
     })
 }

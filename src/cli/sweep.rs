@@ -5,6 +5,8 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use crate::cli::exit::Exit;
+
 use clap::{Args, ValueEnum};
 
 use uncoil::output::write_atomic;
@@ -127,7 +129,7 @@ fn merge_command(files: &[PathBuf], dir: &Path, allow_partial: bool) -> ExitCode
         Ok(m) => m,
         Err(e) => {
             eprintln!("error: {e:#}");
-            return ExitCode::from(1);
+            return Exit::Failed.into();
         }
     };
     let note = dir.join("sweep.missing.txt");
@@ -135,7 +137,7 @@ fn merge_command(files: &[PathBuf], dir: &Path, allow_partial: bool) -> ExitCode
         eprint!(
             "error: the merge is incomplete, nothing written (--allow-partial to write it):\n{missing}"
         );
-        return ExitCode::from(1);
+        return Exit::Failed.into();
     }
     let written = write_merged(&table, dir).and_then(|p| {
         if missing.is_empty() {
@@ -151,11 +153,11 @@ fn merge_command(files: &[PathBuf], dir: &Path, allow_partial: bool) -> ExitCode
             if !missing.is_empty() {
                 print!("partial, as {} says:\n{missing}", note.display());
             }
-            ExitCode::SUCCESS
+            Exit::Ok.into()
         }
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::from(1)
+            Exit::Failed.into()
         }
     }
 }
@@ -176,7 +178,7 @@ pub fn sweep(args: SweepArgs) -> ExitCode {
                 "error: cannot read scene file {}: {e}",
                 scene_path.display()
             );
-            return ExitCode::from(2);
+            return Exit::BadInput.into();
         }
     };
     let stem = scene_path
@@ -187,7 +189,7 @@ pub fn sweep(args: SweepArgs) -> ExitCode {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
-            return ExitCode::from(2);
+            return Exit::BadInput.into();
         }
     };
     let dir = args
@@ -227,16 +229,16 @@ pub fn sweep(args: SweepArgs) -> ExitCode {
                 o.path.display()
             );
             if o.failed > 0 {
-                ExitCode::from(1)
+                Exit::Failed.into()
             } else if o.stopped > 0 {
-                ExitCode::from(3)
+                Exit::Stopped.into()
             } else {
-                ExitCode::SUCCESS
+                Exit::Ok.into()
             }
         }
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::from(1)
+            Exit::Failed.into()
         }
     }
 }
@@ -246,11 +248,11 @@ pub fn report(args: &ReportArgs) -> ExitCode {
     match write_report(args) {
         Ok(md) => {
             print!("{md}");
-            ExitCode::SUCCESS
+            Exit::Ok.into()
         }
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::from(1)
+            Exit::Failed.into()
         }
     }
 }
