@@ -98,9 +98,9 @@ pub struct Solver {
     /// Relax sweeps per substep in the final bang, count (default: 1): the engine's
     /// `num_internal_stabilization_iterations`, Gauss-Seidel sweeps without position bias
     /// after each substep's position update. A contact that starts within a substep is
-    /// resolved there: with one sweep, an impact's friction (on a tilted bar: 1-3 % of what
-    /// it dissipates) and a landing kink's joint (27 %) are left unconverged, whatever the
-    /// substeps; two to four sweeps give the exact split (`model::work`'s tests).
+    /// resolved there: with one sweep an impact's friction and a landing kink's joint are
+    /// left unconverged, whatever the substeps; a few sweeps give the exact split (the
+    /// figures: `model::work`'s tests and docs/final-bang.md).
     pub bang_relax_iterations: u32,
     /// Shortest rigid piece the remaining wound links are joined into when the final bang
     /// begins, m (default: `tape.thickness_m`; 0 keeps every link its own body). A tape is
@@ -108,21 +108,19 @@ pub struct Solver {
     /// innermost links are far shorter, and would only add spin the step must resolve.
     pub bang_piece_m: f64,
     /// Natural frequency of the engine's soft floor contact, Hz (default: 1e4). The coil
-    /// rests on it as on a damped spring and sinks g / (2 pi f)^2 into the floor: rapier's
-    /// 60 Hz lets it sink 69 um, and that sinking is lost energy.
+    /// rests on it as on a damped spring and sinks g / (2 pi f)^2 into the floor, and that
+    /// sinking is lost energy: rapier's own 60 Hz is far too soft (docs/model.md).
     pub contact_hz: f64,
     /// Natural frequency of the engine's soft joints, Hz (default: 1e7). Links pass the
     /// floor at up to ~10^6 per second in the last turns: joints softer than that act as
-    /// damped springs there (thin tape: rapier's 1 MHz loses 15.4 % of E0 before r = 2b),
-    /// and much stiffer ones push energy in (1e8: E0 + 0.35 % at r = 2b).
+    /// damped springs there and lose energy, and much stiffer ones push energy in (the
+    /// thin tape's figures, with their commands: docs/model.md).
     pub joint_hz: f64,
     /// Natural frequency of the joints in the final bang, Hz (default: 1e9, rigid at the
     /// bang's steps). The bang's tension grows as the tape's speed squared, and a soft joint
-    /// stretches under it and damps the stretch away: at `joint_hz`'s 1e7 the thin tape
-    /// loses 50 % of what the bang received to its joints within 20 us of the release, with
-    /// no floor touched (1e9: 20 %, and 3 % at a bang step of 0.05 rad), and the spool's
-    /// numerical share is 9.5 % (1e9: 0.1 %). While rolling, a joint that stiff pushes
-    /// energy in (see `joint_hz`); in the bang the step follows the spin and it does not.
+    /// stretches under it and damps the stretch away (the thin tape's figures:
+    /// docs/final-bang.md). While rolling, a joint that stiff pushes energy in (see
+    /// `joint_hz`); in the bang the step follows the spin and it does not.
     pub bang_joint_hz: f64,
 }
 
