@@ -160,17 +160,20 @@ pub(super) fn insert_floor(
     } else {
         0.5 * scene.tape.thickness_m
     };
-    world.insert_collider(
-        ColliderBuilder::new(SharedShape::halfspace(Vector::Y))
-            .translation(Vector::new(0.0, floor_y))
-            .friction(scene.floor.friction)
-            .collision_groups(InteractionGroups::new(
-                FLOOR_GROUP,
-                TAPE_GROUP,
-                InteractionTestMode::And,
-            )),
-        Some(ground),
-    )
+    world.insert_collider(floor_builder(floor_y, scene.floor.friction), Some(ground))
+}
+
+/// A floor: the half-space below `y` in its parent's frame, with `friction`, meeting the
+/// tape and nothing else.
+pub(super) fn floor_builder(y: f64, friction: f64) -> ColliderBuilder {
+    ColliderBuilder::new(SharedShape::halfspace(Vector::Y))
+        .translation(Vector::new(0.0, y))
+        .friction(friction)
+        .collision_groups(InteractionGroups::new(
+            FLOOR_GROUP,
+            TAPE_GROUP,
+            InteractionTestMode::And,
+        ))
 }
 
 /// How the coil starts: where it stands, how it is turned and how it moves.

@@ -11,8 +11,9 @@
 
 use rapier2d_f64::prelude::*;
 
+use super::build::floor_builder;
 use super::work::{BodyState, FloorImpulse, Moved, floor_impulses, step_work};
-use super::{BangLedger, FLOOR_GROUP, Model, TAPE_GROUP};
+use super::{BangLedger, Model};
 use crate::scene::folded::{ChainJoints, FoldedChain};
 
 /// The chain's state after a step.
@@ -76,14 +77,7 @@ impl FoldedModel {
         );
         let floor = scene.floor.enabled.then(|| {
             world.insert_collider(
-                ColliderBuilder::new(SharedShape::halfspace(Vector::Y))
-                    .translation(Vector::new(0.0, -scene.pin_height_m))
-                    .friction(scene.floor.friction)
-                    .collision_groups(InteractionGroups::new(
-                        FLOOR_GROUP,
-                        TAPE_GROUP,
-                        InteractionTestMode::And,
-                    )),
+                floor_builder(-scene.pin_height_m, scene.floor.friction),
                 Some(ground),
             )
         });

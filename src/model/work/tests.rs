@@ -77,13 +77,7 @@ impl Bench {
             .num_internal_stabilization_iterations = solve.relax;
         let ground = world.insert_body(RigidBodyBuilder::fixed());
         let floor = world.insert_collider(
-            ColliderBuilder::new(SharedShape::halfspace(Vector::Y))
-                .friction(friction)
-                .collision_groups(InteractionGroups::new(
-                    super::super::FLOOR_GROUP,
-                    super::super::TAPE_GROUP,
-                    InteractionTestMode::And,
-                )),
+            crate::model::build::floor_builder(0.0, friction),
             Some(ground),
         );
         let softness = SpringCoefficients::new(
