@@ -197,13 +197,13 @@ fn run_chain_command(chain: &FoldedChain, out: Option<PathBuf>, view: &View) -> 
         return Exit::BadInput.into();
     }
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&chain.name));
-    let _folder = match take_folder(&dir, &chain.name, &chain.source_text) {
+    let folder = match take_folder(&dir, &chain.name, &chain.source_text) {
         Ok(f) => f,
         Err(code) => return code,
     };
     let stop = stop_flag();
     eprintln!("running {} into {} ...", chain.name, dir.display());
-    match write_chain_run(chain, &dir, &stop) {
+    match write_chain_run(chain, &folder, &stop) {
         Ok(report) => {
             print!("{}", chain_summary(chain, &report));
             println!("Wrote {0}/samples.csv and {0}/report.json", dir.display());
@@ -376,11 +376,10 @@ fn run_scene(
     view: &View,
     stop: &AtomicBool,
 ) -> anyhow::Result<(String, StopReason)> {
-    let dir = dir.to_owned();
-    let mut csv = CsvObserver::new(&dir);
-    let mut report = ReportObserver::new(&dir);
+    let mut csv = CsvObserver::new(dir);
+    let mut report = ReportObserver::new(dir);
     let mut log = if view.file {
-        ViewObserver::new(&dir)
+        ViewObserver::new(dir)
     } else {
         ViewObserver::without_file()
     };
@@ -391,7 +390,7 @@ fn run_scene(
         observers.push(&mut log);
     }
     let report = run_until(scene, &mut observers, stop)?;
-    let mut text = summary(&report, &dir);
+    let mut text = summary(&report, dir);
     if let Some(path) = log.path() {
         text.push_str(&format!(
             "Wrote {0}: open it in Foxglove with the layout tools/foxglove-layout.json, or list \

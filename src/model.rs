@@ -79,7 +79,7 @@ pub struct BangRecord {
     pub end: Option<BangEnd>,
 }
 
-use work::{BodyState, Moved};
+use work::BodyState;
 
 /// Where the energy went, each part measured where it happens (J).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]

@@ -162,15 +162,7 @@ impl Model {
             self.end_bang(BangEnd::Rest);
             return;
         }
-        let bodies: Vec<Moved<'_>> = self
-            .free
-            .iter()
-            .zip(before)
-            .map(|(p, &before)| Moved {
-                body: &self.world.bodies[p.body],
-                before,
-            })
-            .collect();
+        let bodies = work::moved(&self.world.bodies, self.free.iter().map(|p| p.body), before);
         let floor: Vec<_> = contacts
             .iter()
             .filter_map(|&c| {

@@ -12,7 +12,7 @@
 use rapier2d_f64::prelude::*;
 
 use super::build::floor_builder;
-use super::work::{BodyState, FloorImpulse, Moved, floor_impulses, step_work};
+use super::work::{BodyState, FloorImpulse, floor_impulses, moved, step_work};
 use super::{BangLedger, Model};
 use crate::scene::folded::{ChainJoints, FoldedChain};
 
@@ -31,8 +31,6 @@ pub struct ChainState {
     pub kinetic_j: f64,
     /// Potential energy released since the start (J).
     pub released_j: f64,
-    /// The lowest point of the chain (m above the plane y = 0).
-    pub lowest_m: f64,
     /// Work done on the chain since the start, by mechanism, as dissipated (J; positive =
     /// taken from the chain); `freeze_j` is unused.
     pub ledger: BangLedger,
@@ -94,6 +92,7 @@ impl FoldedModel {
                 RigidBodyBuilder::dynamic()
                     .pose(Pose::new(0.5 * (a + b), (b - a).to_angle()))
                     .additional_mass_properties(MassProperties::new(Vector::ZERO, m, inertia))
+                    .user_data(k as u128)
                     .can_sleep(false),
             );
             if floor.is_some() {
@@ -160,21 +159,14 @@ impl FoldedModel {
             .collect();
         let energy_before = self.state.kinetic_j - self.state.released_j;
         self.world.step();
+        // Each link's body holds its index along the chain.
         let contacts: Vec<(usize, FloorImpulse)> = match self.floor {
             None => Vec::new(),
             Some(floor) => floor_impulses(&self.world.narrow_phase, &self.world.colliders, floor)
-                .filter_map(|c| Some((self.links.iter().position(|&b| b == c.body)?, c)))
+                .filter_map(|c| Some((self.world.bodies.get(c.body)?.user_data as usize, c)))
                 .collect(),
         };
-        let moved: Vec<Moved<'_>> = self
-            .links
-            .iter()
-            .zip(&before)
-            .map(|(&h, &before)| Moved {
-                body: &self.world.bodies[h],
-                before,
-            })
-            .collect();
+        let moved = moved(&self.world.bodies, self.links.iter().copied(), &before);
         let work = step_work(&moved, &contacts, self.world.gravity, dt);
         // The chain's momentum balance: the pin's impulse is what gravity and the floor
         // leave of the momentum's change.
@@ -226,14 +218,6 @@ impl FoldedModel {
         let tip = last.position().transform_point(end);
         let arm = tip - last.translation();
         let tip_vy = last.linvel().y + last.angvel() * arm.x;
-        let lowest_m = self
-            .links
-            .iter()
-            .map(|&h| {
-                let p = self.world.bodies[h].position();
-                p.transform_point(end).y.min(p.transform_point(-end).y)
-            })
-            .fold(f64::INFINITY, f64::min);
         ChainState {
             t,
             x_m: self.pin_height_m - tip.y,
@@ -241,9 +225,20 @@ impl FoldedModel {
             pin_impulse_ns: pin,
             kinetic_j,
             released_j: self.potential0_j - self.potential_j(),
-            lowest_m,
             ledger: BangLedger::default(),
         }
+    }
+
+    /// The lowest point of the chain now (m above the plane y = 0).
+    pub fn lowest_m(&self) -> f64 {
+        let end = Vector::new(0.5 * self.link.0, 0.0);
+        self.links
+            .iter()
+            .map(|&h| {
+                let p = self.world.bodies[h].position();
+                p.transform_point(end).y.min(p.transform_point(-end).y)
+            })
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// The engine's own kinetic energy of the chain (J), to check the masses it uses.
@@ -318,13 +313,13 @@ mod tests {
         let s = model.state();
         assert!(s.x_m.abs() < 1e-12 && s.kinetic_j == 0.0 && s.released_j.abs() < 1e-12);
         let depth = 4.0 * 0.1 + (0.01f64 - 0.075 * 0.075).sqrt();
-        assert!((s.lowest_m - (1.0 - depth)).abs() < 1e-12);
+        assert!((model.lowest_m() - (1.0 - depth)).abs() < 1e-12);
         // A multibody is put into the same fold.
         let multi =
             chain("[chain]\nlinks = 10\nseparation_m = 0.15\n[solver]\njoints = \"multibody\"");
         let m = multi.state();
         assert!(
-            m.x_m.abs() < 1e-12 && (m.lowest_m - s.lowest_m).abs() < 1e-12,
+            m.x_m.abs() < 1e-12 && (multi.lowest_m() - model.lowest_m()).abs() < 1e-12,
             "{m:?}"
         );
     }

@@ -151,6 +151,22 @@ pub(super) struct Moved<'a> {
     pub before: BodyState,
 }
 
+/// The bodies `handles` of `set` as the work split sees them, each beside its state
+/// `before` the step (in the same order).
+pub(super) fn moved<'a>(
+    set: &'a RigidBodySet,
+    handles: impl Iterator<Item = RigidBodyHandle>,
+    before: &[BodyState],
+) -> Vec<Moved<'a>> {
+    handles
+        .zip(before)
+        .map(|(h, &before)| Moved {
+            body: &set[h],
+            before,
+        })
+        .collect()
+}
+
 /// Work done on the tape during one step, by mechanism (J; positive = energy given to the
 /// tape).
 #[derive(Debug, Clone, Copy, Default)]

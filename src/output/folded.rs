@@ -1,17 +1,17 @@
 //! A folded chain's outputs: `samples.csv` (streamed into `.partial`, renamed when
 //! complete), `report.json` (atomic), and the readable summary. The chain has no Foxglove
-//! view: an older `run.mcap` in the folder is removed so that it is not taken for this
-//! run's.
+//! view; the folder it is written into is taken for it ([`RunFolder`]), so no older
+//! `run.mcap` is left to be taken for this run's.
 
 use std::fs::{self, File};
-use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use anyhow::Context as _;
 use serde::Serialize;
 
+use crate::output::folder::{REPORT, RunFolder, SAMPLES};
 use crate::output::table::Table;
-use crate::output::{partial_path, remove_stale, write_atomic};
+use crate::output::{partial_path, write_atomic};
 use crate::run::folded::{ChainEnd, ChainReport, Crossing, run_chain};
 use crate::scene::folded::FoldedChain;
 
@@ -23,18 +23,15 @@ struct Written<'a> {
     report: &'a ChainReport,
 }
 
-/// Runs `scene` into the folder `dir` (created if missing): `samples.csv` and
-/// `report.json`.
+/// Runs `scene` into `folder` (taken for it, so emptied of earlier runs' files):
+/// `samples.csv` and `report.json`.
 pub fn write_chain_run(
     scene: &FoldedChain,
-    dir: &Path,
+    folder: &RunFolder,
     stop: &AtomicBool,
 ) -> anyhow::Result<ChainReport> {
-    fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let (csv_path, json_path) = (dir.join("samples.csv"), dir.join("report.json"));
-    for old in [&csv_path, &json_path, &dir.join("run.mcap")] {
-        remove_stale(old)?;
-    }
+    let dir = folder.dir();
+    let (csv_path, json_path) = (dir.join(SAMPLES), dir.join(REPORT));
     let tmp = partial_path(&csv_path);
     let file = File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
     let mut csv = csv::Writer::from_writer(file);

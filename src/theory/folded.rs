@@ -147,8 +147,7 @@ mod tests {
             // Momentum: the chain's is the free arm's, lambda (L - x) v / 2, downward; its
             // rate (with dx/dt = v) is the weight less the pin's force.
             let h = 1e-6;
-            let p = |x: f64| 0.5 * lambda * (l - x) * fall.speed(x);
-            let dp_dt = (p(x + h) - p(x - h)) / (2.0 * h) * v;
+            let dp_dt = (fall.momentum(x + h) - fall.momentum(x - h)) / (2.0 * h) * v;
             assert!(
                 (m * g - fall.pin_force(x) - dp_dt).abs() < 1e-6 * m * g,
                 "x = {x}"

@@ -144,15 +144,7 @@ impl Bench {
             floor_impulses(&self.world.narrow_phase, &self.world.colliders, self.floor)
                 .filter_map(|c| Some((self.bodies.iter().position(|&b| b == c.body)?, c)))
                 .collect();
-        let moved: Vec<Moved<'_>> = self
-            .bodies
-            .iter()
-            .zip(&before)
-            .map(|(&b, &before)| Moved {
-                body: &self.world.bodies[b],
-                before,
-            })
-            .collect();
+        let moved = moved(&self.world.bodies, self.bodies.iter().copied(), &before);
         let w = step_work(&moved, &floor, self.world.gravity, dt);
         self.booked.normal_j += w.normal_j;
         self.booked.friction_j += w.friction_j;

@@ -43,15 +43,12 @@ impl SweepTable {
     }
 
     fn read_rows(path: &Path, allow_cut: bool) -> anyhow::Result<(Self, bool)> {
-        let unterminated = allow_cut
-            && std::fs::read(path)
-                .with_context(|| format!("cannot read {}", path.display()))?
-                .last()
-                .is_some_and(|&b| b != b'\n');
+        let bytes =
+            std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+        let unterminated = allow_cut && bytes.last().is_some_and(|&b| b != b'\n');
         let mut reader = csv::ReaderBuilder::new()
             .flexible(true)
-            .from_path(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
+            .from_reader(bytes.as_slice());
         let header: Vec<String> = reader
             .headers()
             .with_context(|| format!("cannot read {}", path.display()))?
