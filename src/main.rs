@@ -9,7 +9,7 @@
 //! `report.json`, and the outputs hold everything logged up to the stop), 130 a run stopped
 //! by Ctrl-C (its outputs are complete up to there).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -17,13 +17,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use clap::{Parser, Subcommand};
 
 use uncoil::output::compare::{SampleLog, table};
+use uncoil::output::files::{self, RunFiles};
 use uncoil::output::folded::{chain_summary, write_chain_run};
 use uncoil::output::folder::{FolderError, RunFolder, run_id};
+use uncoil::output::summary;
 use uncoil::output::view::ViewObserver;
-use uncoil::output::{CsvObserver, ReportObserver, summary};
 use uncoil::run::folded::ChainEnd;
+use uncoil::run::run;
 use uncoil::run::stop::{Status, StopReason};
-use uncoil::run::{Observer, run, run_until};
 use uncoil::scene::AnyScene;
 use uncoil::scene::Scene;
 use uncoil::scene::folded::FoldedChain;
@@ -166,12 +167,17 @@ fn main() -> ExitCode {
 /// `uncoil run` on a coil's scene.
 fn run_command(scene: &Scene, out: Option<PathBuf>, view: &View) -> ExitCode {
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&scene.name));
-    let folder = match take_folder(&dir, &scene.name, &scene.source_text) {
+    let shown = match (view.file, view.live) {
+        (true, _) => files::View::File,
+        (false, Some(_)) => files::View::Unwritten,
+        (false, None) => files::View::Off,
+    };
+    let mut files = match RunFiles::take(&dir, scene, shown) {
         Ok(f) => f,
-        Err(code) => return code,
+        Err(e) => return folder_refused(e),
     };
     let stop = stop_flag();
-    match run_scene(scene, folder.dir(), view, &stop) {
+    match run_scene(scene, &mut files, view, &stop) {
         Ok((text, end)) => {
             print!("{text}");
             match end.status() {
@@ -197,9 +203,10 @@ fn run_chain_command(chain: &FoldedChain, out: Option<PathBuf>, view: &View) -> 
         return Exit::BadInput.into();
     }
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&chain.name));
-    let folder = match take_folder(&dir, &chain.name, &chain.source_text) {
+    let folder = match RunFolder::take(&dir, &run_id(&chain.name, &chain.source_text), &chain.name)
+    {
         Ok(f) => f,
-        Err(code) => return code,
+        Err(e) => return folder_refused(e),
     };
     let stop = stop_flag();
     eprintln!("running {} into {} ...", chain.name, dir.display());
@@ -357,41 +364,30 @@ fn serve(log: &mut ViewObserver, view: &View) -> anyhow::Result<()> {
     }
 }
 
-/// Runs `scene` into its output folder; returns the summary and why the run stopped.
-/// Takes the output folder `dir` for a run of the scene `name` (text `text`): exit 2 if
-/// another run holds it, 1 if it cannot be made.
-fn take_folder(dir: &Path, name: &str, text: &str) -> Result<RunFolder, ExitCode> {
-    RunFolder::take(dir, &run_id(name, text), name).map_err(|e| {
-        eprintln!("error: {e:#}");
-        match e {
-            FolderError::Busy { .. } => Exit::BadInput.into(),
-            FolderError::Io(_) => Exit::Failed.into(),
-        }
-    })
+/// Why a folder could not be taken for a run, said, and its exit: 2 if another run holds it,
+/// 1 if it cannot be made.
+fn folder_refused(e: FolderError) -> ExitCode {
+    eprintln!("error: {e:#}");
+    match e {
+        FolderError::Busy { .. } => Exit::BadInput.into(),
+        FolderError::Io(_) => Exit::Failed.into(),
+    }
 }
 
+/// Runs `scene` into its files; returns the summary and why the run stopped.
 fn run_scene(
     scene: &Scene,
-    dir: &Path,
+    files: &mut RunFiles,
     view: &View,
     stop: &AtomicBool,
 ) -> anyhow::Result<(String, StopReason)> {
-    let mut csv = CsvObserver::new(dir);
-    let mut report = ReportObserver::new(dir);
-    let mut log = if view.file {
-        ViewObserver::new(dir)
-    } else {
-        ViewObserver::without_file()
-    };
-    serve(&mut log, view)?;
-    eprintln!("running {} into {} ...", scene.name, dir.display());
-    let mut observers: Vec<&mut dyn Observer> = vec![&mut csv, &mut report];
-    if view.file || view.live.is_some() {
-        observers.push(&mut log);
+    if let Some(log) = files.view_mut() {
+        serve(log, view)?;
     }
-    let report = run_until(scene, &mut observers, stop)?;
-    let mut text = summary(&report, dir);
-    if let Some(path) = log.path() {
+    eprintln!("running {} into {} ...", scene.name, files.dir().display());
+    let report = files.run(scene, None, stop)?;
+    let mut text = summary(&report, files.dir());
+    if let Some(path) = files.log_path() {
         text.push_str(&format!(
             "Wrote {0}: open it in Foxglove with the layout tools/foxglove-layout.json, or list \
              it with `uncoil inspect {0}`\n",

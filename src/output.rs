@@ -6,6 +6,7 @@
 
 pub mod compare;
 pub mod fields;
+pub mod files;
 pub mod folded;
 pub mod folder;
 pub mod inspect;

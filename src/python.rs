@@ -13,8 +13,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
 use crate::output::fields::fields;
-use crate::output::view::ViewObserver;
-use crate::output::{CsvObserver, ReportObserver, folder};
+use crate::output::files::{RunFiles, View};
 use crate::run::{Observer, RunReport, Sample, run_until};
 use crate::scene::Scene;
 use crate::scene::overrides::{Override, scene_file_with_overrides};
@@ -127,17 +126,9 @@ fn run_scene(
         let report = run_until(scene, &mut [&mut columns], stop)?;
         return Ok((columns, report));
     };
-    // The folder is the run's while it runs, as for `uncoil run` (`output::folder`).
-    let run_id = folder::run_id(&scene.name, &scene.source_text);
-    let _folder = folder::RunFolder::take(dir, &run_id, &scene.name)?;
-    let mut csv = CsvObserver::new(dir);
-    let mut report = ReportObserver::new(dir);
-    let mut log = mcap.then(|| ViewObserver::new(dir));
-    let mut observers: Vec<&mut dyn Observer> = vec![&mut columns, &mut csv, &mut report];
-    if let Some(log) = log.as_mut() {
-        observers.push(log);
-    }
-    let report = run_until(scene, &mut observers, stop)?;
+    // The folder is the run's while it runs, as for `uncoil run` (`output::files`).
+    let view = if mcap { View::File } else { View::Off };
+    let report = RunFiles::take(dir, scene, view)?.run(scene, Some(&mut columns), stop)?;
     Ok((columns, report))
 }
 

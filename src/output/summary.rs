@@ -6,6 +6,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::output::compare::paradox;
+use crate::output::folder::{REPORT, SAMPLES};
 use crate::run::RunReport;
 use crate::run::report::MilestoneKey;
 use crate::run::stop::Status;
@@ -202,8 +203,8 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
     let _ = writeln!(
         o,
         "Wrote {} and {}",
-        out_dir.join("samples.csv").display(),
-        out_dir.join("report.json").display()
+        out_dir.join(SAMPLES).display(),
+        out_dir.join(REPORT).display()
     );
     o
 }

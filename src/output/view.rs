@@ -79,7 +79,7 @@ impl ViewObserver {
     /// An observer writing `dir/run.mcap`.
     pub fn new(dir: &Path) -> Self {
         let mut view = Self::without_file();
-        view.path = Some(dir.join("run.mcap"));
+        view.path = Some(dir.join(crate::output::folder::LOG));
         view
     }
 

@@ -5,14 +5,16 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
 
 use anyhow::Context as _;
 
+use crate::output::files::{RunFiles, View};
 use crate::output::table::Table;
-use crate::output::{CSV_COLUMNS, CsvObserver, ReportObserver, folder};
+use crate::output::{CSV_COLUMNS, folder};
+use crate::run::RunReport;
 use crate::run::limits::label;
 use crate::run::stop::{Status, StopReason};
-use crate::run::{Observer, RunReport, run};
 use crate::scene::Scene;
 
 /// How one case ended.
@@ -117,12 +119,7 @@ pub fn check_scene(path: &Path, out_root: &Path) -> Case {
 }
 
 fn run_into(scene: &Scene, dir: &Path) -> anyhow::Result<RunReport> {
-    let run_id = folder::run_id(&scene.name, &scene.source_text);
-    let _folder = folder::RunFolder::take(dir, &run_id, &scene.name)?;
-    let mut csv = CsvObserver::new(dir);
-    let mut json = ReportObserver::new(dir);
-    let observers: &mut [&mut dyn Observer] = &mut [&mut csv, &mut json];
-    run(scene, observers)
+    RunFiles::take(dir, scene, View::Off)?.run(scene, None, &AtomicBool::new(false))
 }
 
 /// What is wrong with the outputs in `dir`: a missing `samples.csv` or `report.json`, a
@@ -130,19 +127,19 @@ fn run_into(scene: &Scene, dir: &Path) -> anyhow::Result<RunReport> {
 /// not a finite number (empty cells are allowed), a `NaN` or infinity in the JSON.
 pub fn verify_outputs(dir: &Path) -> Vec<String> {
     let mut problems = Vec::new();
-    for name in ["samples.csv", "report.json"] {
-        let partial = dir.join(format!("{name}.partial"));
+    for name in [folder::SAMPLES, folder::REPORT] {
+        let partial = crate::output::partial_path(&dir.join(name));
         if partial.exists() {
             problems.push(format!("{} left behind", partial.display()));
         }
     }
-    match std::fs::read_to_string(dir.join("samples.csv")) {
+    match std::fs::read_to_string(dir.join(folder::SAMPLES)) {
         Ok(text) => problems.extend(csv_problems(&text)),
-        Err(e) => problems.push(format!("samples.csv: {e}")),
+        Err(e) => problems.push(format!("{}: {e}", folder::SAMPLES)),
     }
-    match std::fs::read_to_string(dir.join("report.json")) {
+    match std::fs::read_to_string(dir.join(folder::REPORT)) {
         Ok(text) => problems.extend(report_problem(&text)),
-        Err(e) => problems.push(format!("report.json: {e}")),
+        Err(e) => problems.push(format!("{}: {e}", folder::REPORT)),
     }
     problems.extend(folder::mismatches(dir));
     problems
@@ -388,7 +385,7 @@ mod tests {
         )
         .unwrap();
         scene.output.scene_rate_hz = 0.0;
-        let report = run(&scene, &mut []).unwrap();
+        let report = crate::run::run(&scene, &mut []).unwrap();
         let mut v = serde_json::to_value(&report).unwrap();
         assert_eq!(report_problem(&v.to_string()), None);
         // An optional value may be null; a number may not (a NaN written out).

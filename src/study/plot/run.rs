@@ -11,6 +11,7 @@ use super::{
     Area, Curve, EQ7, EXACT, FONT, LinChart, Line, LogChart, SIM, color, draw_line, err, legend,
     line_chart, log_chart, log_range, pairs, positive_pairs, range,
 };
+use crate::output::folder::{REPORT, SAMPLES};
 use crate::run::RunReport;
 use crate::run::limits::LimitKind;
 use crate::study::sweep::SweepTable;
@@ -40,7 +41,7 @@ fn against_references<'a>(t: &[f64], columns: &[Vec<f64>; 3]) -> [Curve<'a>; 3] 
 /// `dir/forces.svg` (`N_tot`, and `F_tot` with its split into `F` and `F_int`, against the
 /// laid fraction up to 0.95, with the exact-geometry model's). Returns the files written.
 pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
-    let run = RunFiles::read(dir)?;
+    let run = WrittenRun::read(dir)?;
     let motion = dir.join("motion.svg");
     motion_plot(&motion, &run)?;
     let energy = dir.join("energy.svg");
@@ -53,7 +54,7 @@ pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
 }
 
 /// A run's files read back: its samples, its report and what the pictures take from it.
-struct RunFiles {
+struct WrittenRun {
     samples: SweepTable,
     report: RunReport,
     /// MgR (J).
@@ -72,11 +73,11 @@ struct RunFiles {
     upto: usize,
 }
 
-impl RunFiles {
+impl WrittenRun {
     /// Reads `dir/samples.csv` and `dir/report.json`.
     fn read(dir: &Path) -> anyhow::Result<Self> {
-        let samples = SweepTable::read(&dir.join("samples.csv"))?;
-        let report_path = dir.join("report.json");
+        let samples = SweepTable::read(&dir.join(SAMPLES))?;
+        let report_path = dir.join(REPORT);
         let text = std::fs::read_to_string(&report_path)
             .with_context(|| format!("cannot read {}", report_path.display()))?;
         let mut de = serde_json::Deserializer::from_str(&text);
@@ -130,7 +131,7 @@ fn column(samples: &SweepTable, c: &str) -> anyhow::Result<Vec<f64>> {
 
 /// `path`: r and x' against time, with the exact-geometry model and eq. (7), up to the
 /// final bang.
-fn motion_plot(path: &Path, run: &RunFiles) -> anyhow::Result<()> {
+fn motion_plot(path: &Path, run: &WrittenRun) -> anyhow::Result<()> {
     let name = &run.name;
     let tr = &run.t[..run.upto];
     let root = SVGBackend::new(path, (900, 800)).into_drawing_area();
@@ -166,7 +167,7 @@ fn motion_plot(path: &Path, run: &RunFiles) -> anyhow::Result<()> {
 
 /// `path`: kinetic, potential and lost energy over the whole run, with MgR, E0 and the
 /// start of the final bang; below, if there was one, the bang alone ([`bang_panel`]).
-fn energy_plot(path: &Path, run: &RunFiles) -> anyhow::Result<()> {
+fn energy_plot(path: &Path, run: &WrittenRun) -> anyhow::Result<()> {
     let (name, t, bang_t) = (&run.name, &run.t, run.bang_t);
     let height = if bang_t.is_some() { 950 } else { 500 };
     let root = SVGBackend::new(path, (900, height)).into_drawing_area();
@@ -218,7 +219,13 @@ fn energy_plot(path: &Path, run: &RunFiles) -> anyhow::Result<()> {
 
 /// The energy ledger's curves over `t`: kinetic `k`, potential `p`, lost so far `d`, and
 /// the levels MgR and E0.
-fn ledger_curves<'a>(run: &RunFiles, t: &[f64], k: &[f64], p: &[f64], d: &[f64]) -> [Curve<'a>; 5] {
+fn ledger_curves<'a>(
+    run: &WrittenRun,
+    t: &[f64],
+    k: &[f64],
+    p: &[f64],
+    d: &[f64],
+) -> [Curve<'a>; 5] {
     let (t0, t1) = (
         t.first().copied().unwrap_or(0.0),
         t.last().copied().unwrap_or(1.0),
@@ -419,7 +426,7 @@ fn bang_panel(
 /// `approach.svg`: the contact-line speed against the equivalent radius over the unroll
 /// (the samples up to the final bang), log-log, with the exact-geometry model, eq. (7) and its
 /// x' ~ 1/r, and a mark where each reference stops applying and at the release.
-fn approach_plot(path: &Path, run: &RunFiles) -> anyhow::Result<()> {
+fn approach_plot(path: &Path, run: &WrittenRun) -> anyhow::Result<()> {
     let sim = positive_pairs(&run.cut("r_m")?, &run.cut("xdot_m_s")?);
     let exact = reference_curve(&run.report.approach.exact_curve);
     let eq7 = reference_curve(&run.report.approach.eq7_curve);

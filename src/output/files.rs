@@ -1,0 +1,84 @@
+//! A run's files, wired in one place. `uncoil run`, `uncoil check` and `uncoil.run(out=...)`
+//! all write a coil's run through [`RunFiles`]: the folder taken for the run
+//! ([`RunFolder`]), then `samples.csv`, `report.json` and, when asked, the Foxglove view,
+//! in that order (the report stamps the finished samples; the view's `run.mcap` closes last).
+
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+
+use crate::output::folder::{FolderError, RunFolder, run_id};
+use crate::output::view::ViewObserver;
+use crate::output::{CsvObserver, ReportObserver};
+use crate::run::{Observer, RunReport, run_until};
+use crate::scene::Scene;
+
+/// Whether a run has a Foxglove view, and whether it is written to `run.mcap`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum View {
+    /// No view.
+    Off,
+    /// The view, written to `run.mcap` (and served live, if the caller starts a server).
+    File,
+    /// The view without a file: its channels reach only a live server.
+    Unwritten,
+}
+
+/// The observers that write one run's files into the folder taken for it.
+pub struct RunFiles {
+    folder: RunFolder,
+    csv: CsvObserver,
+    report: ReportObserver,
+    view: Option<ViewObserver>,
+}
+
+impl RunFiles {
+    /// Takes `dir` for a run of `scene` (see [`RunFolder::take`]) and wires its files.
+    pub fn take(dir: &Path, scene: &Scene, view: View) -> Result<Self, FolderError> {
+        let folder = RunFolder::take(dir, &run_id(&scene.name, &scene.source_text), &scene.name)?;
+        let dir = folder.dir();
+        let view = match view {
+            View::Off => None,
+            View::File => Some(ViewObserver::new(dir)),
+            View::Unwritten => Some(ViewObserver::without_file()),
+        };
+        Ok(Self {
+            csv: CsvObserver::new(dir),
+            report: ReportObserver::new(dir),
+            view,
+            folder,
+        })
+    }
+
+    /// The folder.
+    pub fn dir(&self) -> &Path {
+        self.folder.dir()
+    }
+
+    /// The Foxglove view, to start a live server on before the run.
+    pub fn view_mut(&mut self) -> Option<&mut ViewObserver> {
+        self.view.as_mut()
+    }
+
+    /// Where `run.mcap` is written, if it is.
+    pub fn log_path(&self) -> Option<&Path> {
+        self.view.as_ref().and_then(ViewObserver::path)
+    }
+
+    /// Runs `scene` into the files, with `first` observing before them (the Python
+    /// package's columns); stops early once `stop` is set.
+    pub fn run<'a>(
+        &'a mut self,
+        scene: &Scene,
+        first: Option<&'a mut dyn Observer>,
+        stop: &AtomicBool,
+    ) -> anyhow::Result<RunReport> {
+        let mut observers: Vec<&mut dyn Observer> = Vec::with_capacity(4);
+        observers.extend(first);
+        observers.push(&mut self.csv);
+        observers.push(&mut self.report);
+        if let Some(view) = self.view.as_mut() {
+            observers.push(view);
+        }
+        run_until(scene, &mut observers, stop)
+    }
+}
