@@ -11,7 +11,9 @@ use clap::{Args, ValueEnum};
 
 use uncoil::output::write_atomic;
 use uncoil::study::analysis::{Reference, SweepAnalysis};
-use uncoil::study::sweep::{Shard, Sweep, SweepOptions, SweepTable, Vary, merge, write_merged};
+use uncoil::study::sweep::{
+    Col, Shard, Sweep, SweepOptions, SweepTable, Vary, merge, write_merged,
+};
 
 /// Arguments of `uncoil sweep`.
 #[derive(Args)]
@@ -264,8 +266,8 @@ fn write_report(args: &ReportArgs) -> anyhow::Result<String> {
         RefArg::Eq7 => Reference::Eq7,
     };
     let cost = match args.cost {
-        CostArg::Unroll => "wall_rolling_s",
-        CostArg::Total => "wall_s",
+        CostArg::Unroll => Col::WallRolling.name(),
+        CostArg::Total => Col::Wall.name(),
     };
     let dir = args.out.clone().unwrap_or_else(|| folder_of(&args.sweep));
     let title = args.title.clone().unwrap_or_else(|| {

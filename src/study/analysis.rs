@@ -13,10 +13,10 @@ mod report;
 
 use std::collections::BTreeMap;
 
-pub use self::bang::{BANG_OBSERVABLES, BangStudy, bang_studies};
+pub use self::bang::{BANG_OBSERVABLES, BangStudy, NUMERICAL, Reading, bang_studies};
 pub use self::fit::{PowerFit, fit_power, pareto_front, step_size};
 
-use crate::study::sweep::{RowStatus, STATUS_COLUMN, SweepTable};
+use crate::study::sweep::{Col, ERR_GEO_PREFIX, RowStatus, STATUS_COLUMN, SweepTable};
 
 /// Which error a report uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -29,10 +29,10 @@ pub enum Reference {
 
 impl Reference {
     /// The sweep column holding this error.
-    pub fn column(self) -> &'static str {
+    pub fn column(self) -> Col {
         match self {
-            Reference::Exact => "max_err_geo",
-            Reference::Eq7 => "max_err_eq7",
+            Reference::Exact => Col::MaxErrGeo,
+            Reference::Eq7 => Col::MaxErrEq7,
         }
     }
 
@@ -142,11 +142,11 @@ impl SweepAnalysis {
                 .ok_or_else(|| anyhow::anyhow!("the sweep has no `{name}` column"))
         };
         let cost = col(cost_column)?;
-        let err = col(reference.column())?;
-        let lost = col("lost_before_bang_of_e0")?;
-        let links = col("links")?;
-        let wall = col("wall_s")?;
-        let steps = col("steps")?;
+        let err = col(reference.column().name())?;
+        let lost = col(Col::LostBeforeBangOfE0.name())?;
+        let links = col(Col::Links.name())?;
+        let wall = col(Col::Wall.name())?;
+        let steps = col(Col::Steps.name())?;
         let ok = fitting_rows(&table)
             .ok_or_else(|| anyhow::anyhow!("the sweep has no `{STATUS_COLUMN}` column"))?;
         let keys = table.varied_keys();
@@ -228,7 +228,7 @@ fn milestone_errors(table: &SweepTable) -> Vec<Vec<f64>> {
     table
         .header
         .iter()
-        .filter(|h| h.starts_with("err_geo_"))
+        .filter(|h| h.starts_with(ERR_GEO_PREFIX))
         .filter_map(|h| table.numbers(h))
         .collect()
 }

@@ -27,7 +27,8 @@ use rayon::prelude::*;
 
 pub use self::grid::{Combination, CombinationError, Shard, Vary, file_name, grid, scenes};
 pub use self::row::{
-    BANG_COLUMNS, INDEX_COLUMN, RowStatus, STATUS_COLUMN, header, result_cells, result_columns,
+    Col, ERR_EQ7_PREFIX, ERR_GEO_PREFIX, INDEX_COLUMN, RowStatus, STATUS_COLUMN, header,
+    result_cells, result_columns,
 };
 pub use self::table::{Missing, SweepTable, csv_line, merge, write_merged};
 

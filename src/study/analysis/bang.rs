@@ -6,22 +6,50 @@
 use std::collections::BTreeMap;
 
 use super::{PowerFit, fit_power, fitting_rows, step_size};
-use crate::study::sweep::SweepTable;
+use crate::study::sweep::{Col, SweepTable};
+
+/// How a bang study reads an observable from a sweep row.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reading {
+    /// A column as it is.
+    Column(Col),
+    /// What the bang dissipated over what it received.
+    DissipatedOfKineticIn,
+    /// How far the free end stopped short of the tape lying flat (m).
+    ShortOfFlat,
+    /// The bang's engine time over the unroll's.
+    CostOfUnroll,
+}
 
 /// The final bang's observables a bang study follows: a label and how to read it from a
-/// sweep row (`None` where the run has no bang).
-pub const BANG_OBSERVABLES: [(&str, &str); 10] = [
-    ("dissipated / kinetic in", "dissipated"),
-    ("floor normal share", "bang_floor_normal_of"),
-    ("floor friction share", "bang_floor_friction_of"),
-    ("numerical share", "bang_numerical_of"),
-    ("top speed (m/s)", "bang_top_speed_m_s"),
-    ("duration (s)", "bang_duration_s"),
-    ("peak floor force (N)", "bang_peak_floor_force_n"),
-    ("floor impulse (N s)", "bang_floor_impulse_n_s"),
-    ("end short of flat (m)", "short"),
-    ("bang wall / unroll wall", "cost"),
+/// sweep row (`NaN` where the run has no bang).
+pub const BANG_OBSERVABLES: [(&str, Reading); 10] = [
+    ("dissipated / kinetic in", Reading::DissipatedOfKineticIn),
+    (
+        "floor normal share",
+        Reading::Column(Col::BangFloorNormalOf),
+    ),
+    (
+        "floor friction share",
+        Reading::Column(Col::BangFloorFrictionOf),
+    ),
+    ("numerical share", NUMERICAL),
+    ("top speed (m/s)", Reading::Column(Col::BangTopSpeed)),
+    ("duration (s)", Reading::Column(Col::BangDuration)),
+    (
+        "peak floor force (N)",
+        Reading::Column(Col::BangPeakFloorForce),
+    ),
+    (
+        "floor impulse (N s)",
+        Reading::Column(Col::BangFloorImpulse),
+    ),
+    ("end short of flat (m)", Reading::ShortOfFlat),
+    ("bang wall / unroll wall", Reading::CostOfUnroll),
 ];
+
+/// The numerical share, whose limit is zero: its order is fitted to the mean itself.
+pub const NUMERICAL: Reading = Reading::Column(Col::BangNumericalOf);
 
 /// The final bang in one varied key, the others held: a chaotic process, so each
 /// setting is an ensemble (the repetitions, e.g. pushes differing in the fourth digit) and
@@ -51,15 +79,15 @@ pub struct BangStudy {
 /// of the other keys, the `repeats` pooled as the ensemble, over the runs whose bang took
 /// time. Empty if the sweep has no bang columns or no key takes two settings.
 pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
-    let col = |name: &str| table.numbers(name);
+    let col = |c: Col| table.col(c);
     let (Some(kin), Some(diss), Some(laid), Some(end), Some(bw), Some(rw), Some(duration)) = (
-        col("bang_kinetic_in_j"),
-        col("bang_dissipated_j"),
-        col("bang_laid_length_m"),
-        col("bang_end_x_m"),
-        col("bang_wall_s"),
-        col("wall_rolling_s"),
-        col("bang_duration_s"),
+        col(Col::BangKineticIn),
+        col(Col::BangDissipated),
+        col(Col::BangLaidLength),
+        col(Col::BangEndX),
+        col(Col::BangWall),
+        col(Col::WallRolling),
+        col(Col::BangDuration),
     ) else {
         return Vec::new();
     };
@@ -67,11 +95,11 @@ pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
     let fits = fitting_rows(table).unwrap_or_else(|| vec![true; rows]);
     let values: Vec<Vec<f64>> = BANG_OBSERVABLES
         .iter()
-        .map(|(_, c)| match *c {
-            "dissipated" => (0..rows).map(|r| diss[r] / kin[r]).collect(),
-            "short" => (0..rows).map(|r| laid[r] - end[r]).collect(),
-            "cost" => (0..rows).map(|r| bw[r] / rw[r]).collect(),
-            c => col(c).unwrap_or_else(|| vec![f64::NAN; rows]),
+        .map(|(_, reading)| match *reading {
+            Reading::DissipatedOfKineticIn => (0..rows).map(|r| diss[r] / kin[r]).collect(),
+            Reading::ShortOfFlat => (0..rows).map(|r| laid[r] - end[r]).collect(),
+            Reading::CostOfUnroll => (0..rows).map(|r| bw[r] / rw[r]).collect(),
+            Reading::Column(c) => col(c).unwrap_or_else(|| vec![f64::NAN; rows]),
         })
         .collect();
     let keys = table.varied_keys();
@@ -126,13 +154,13 @@ fn ensemble_study(
     settings.sort_by(|a, b| step_size(key, b.0).total_cmp(&step_size(key, a.0)));
     let h: Vec<f64> = settings.iter().map(|(v, _)| step_size(key, *v)).collect();
     let (mut mean, mut se, mut fit) = (Vec::new(), Vec::new(), Vec::new());
-    for (v, (_, column)) in values.iter().zip(BANG_OBSERVABLES) {
+    for (v, (_, reading)) in values.iter().zip(BANG_OBSERVABLES) {
         let stats: Vec<(f64, f64)> = settings
             .iter()
             .map(|(_, rs)| mean_and_se(rs.iter().map(|&r| v[r])))
             .collect();
         let m: Vec<f64> = stats.iter().map(|s| s.0).collect();
-        if column == "bang_numerical_of" {
+        if reading == NUMERICAL {
             fit.push(fit_power(&h, &m));
         } else {
             let finest = *m.last().expect("two settings");

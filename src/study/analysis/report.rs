@@ -4,8 +4,8 @@
 
 use std::fmt::Write as _;
 
-use super::{BANG_OBSERVABLES, BangStudy, PowerFit, SweepAnalysis};
-use crate::study::sweep::{STATUS_COLUMN, SweepTable};
+use super::{BANG_OBSERVABLES, BangStudy, NUMERICAL, PowerFit, SweepAnalysis};
+use crate::study::sweep::{INDEX_COLUMN, STATUS_COLUMN, SweepTable};
 
 impl BangStudy {
     /// The study as Markdown: one row per setting (mean ± standard error of each
@@ -41,7 +41,7 @@ impl BangStudy {
         let last = self.values.len() - 1;
         let orders: Vec<String> = (0..names.len())
             .map(|k| {
-                if BANG_OBSERVABLES[k].1 == "bang_numerical_of" {
+                if BANG_OBSERVABLES[k].1 == NUMERICAL {
                     return self.fit[k].map_or_else(
                         || "-".to_owned(),
                         |f| {
@@ -94,7 +94,7 @@ impl SweepAnalysis {
     /// when every run counts).
     fn left_out(&self) -> String {
         let t = &self.table;
-        let (Some(status), Some(index)) = (t.column(STATUS_COLUMN), t.column("index")) else {
+        let (Some(status), Some(index)) = (t.column(STATUS_COLUMN), t.column(INDEX_COLUMN)) else {
             return String::new();
         };
         let keys = t.varied_keys();
@@ -356,7 +356,7 @@ impl SweepAnalysis {
         let e7 = get("max_err_eq7");
         let lost = get("lost_before_bang_of_e0");
         let sc = t.column(STATUS_COLUMN).expect("checked in new");
-        let ic = t.column("index").unwrap_or(0);
+        let ic = t.column(INDEX_COLUMN).unwrap_or(0);
         let pc = |v: f64| {
             if v.is_finite() {
                 format!("{:.3}%", 100.0 * v)

@@ -88,71 +88,286 @@ impl FromStr for RowStatus {
     }
 }
 
-/// Column names after the varied keys, for a scene's milestone labels.
-pub fn result_columns(milestone_labels: &[String]) -> Vec<String> {
-    let mut c: Vec<String> = [
-        "links",
-        "steps",
-        "jobs",
-        "wall_s",
-        "wall_rolling_s",
-        "sim_time_s",
-        "bang_time_s",
-    ]
-    .iter()
-    .map(|s| (*s).to_owned())
-    .collect();
-    for l in milestone_labels {
-        c.push(format!("err_geo_{l}"));
-    }
-    for l in milestone_labels {
-        c.push(format!("err_eq7_{l}"));
-    }
-    c.extend(
-        [
-            "max_err_geo",
-            "max_err_eq7",
-            "e0_j",
-            "lost_before_bang_j",
-            "lost_before_bang_of_e0",
-            "lost_before_2b_of_e0",
-            "max_energy_rise_rel",
-            "peak_xdot_m_s",
-            "peak_r_m",
-            "lift_off_r_m",
-            "leaves_exact_r_m",
-            "exact_hops_r_m",
-        ]
-        .iter()
-        .map(|s| (*s).to_owned()),
-    );
-    c.extend(BANG_COLUMNS.iter().map(|s| (*s).to_owned()));
-    c.extend([STATUS_COLUMN].iter().map(|s| (*s).to_owned()));
-    c
+/// A column of `sweep.csv` other than the varied keys and the milestones' errors: the one
+/// place its name is spelt and its cell is made, so the header and the cells cannot drift
+/// apart, and a reader names the column it wants by this type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Col {
+    /// The combination's place in the full grid: [`INDEX_COLUMN`].
+    Index,
+    /// Links in the chain.
+    Links,
+    /// Engine steps taken.
+    Steps,
+    /// Runs the sweep ran at once.
+    Jobs,
+    /// The run's engine time (s).
+    Wall,
+    /// Its part before the final bang (s).
+    WallRolling,
+    /// Simulated time (s).
+    SimTime,
+    /// When the bang began (s).
+    BangTime,
+    /// Largest milestone time error against the exact-geometry model.
+    MaxErrGeo,
+    /// Largest milestone time error against eq. (7).
+    MaxErrEq7,
+    /// The energy at the start (J).
+    E0,
+    /// Lost before the bang (J).
+    LostBeforeBang,
+    /// Lost before the bang, of the energy at the start.
+    LostBeforeBangOfE0,
+    /// Lost before r = 2b, of the energy at the start.
+    LostBefore2bOfE0,
+    /// The largest energy rise in a step, relative.
+    MaxEnergyRiseRel,
+    /// The approach's peak contact-line speed (m/s).
+    PeakXdot,
+    /// The radius at that peak (m).
+    PeakR,
+    /// Where the coil lifted off (m).
+    LiftOffR,
+    /// Where the motion left the exact model's (m).
+    LeavesExactR,
+    /// Where the exact model predicts a hop (m).
+    ExactHopsR,
+    /// The kinetic energy the bang received (J).
+    BangKineticIn,
+    /// What the bang dissipated (J).
+    BangDissipated,
+    /// Its share to floor impacts.
+    BangFloorNormalOf,
+    /// Its share to floor friction.
+    BangFloorFrictionOf,
+    /// Its share to the joints.
+    BangJointsOf,
+    /// Its share to frozen links.
+    BangFreezeOf,
+    /// Its residual share.
+    BangResidualOf,
+    /// Its numerical share (joints and residual).
+    BangNumericalOf,
+    /// The bang's top speed (m/s).
+    BangTopSpeed,
+    /// The bang's duration (s).
+    BangDuration,
+    /// The bang's peak floor force (N).
+    BangPeakFloorForce,
+    /// The bang's floor impulse (N s).
+    BangFloorImpulse,
+    /// Where the free end came to rest (m).
+    BangEndX,
+    /// Tape laid by the bang (m).
+    BangLaidLength,
+    /// Still moving at the bang's end, of what it received.
+    BangStillMovingOf,
+    /// The bang's engine time (s).
+    BangWall,
+    /// What ended the bang: `rest` or `cap`.
+    BangEndedBy,
+    /// How the run ended: [`STATUS_COLUMN`], a [`RowStatus`].
+    Status,
 }
 
-/// The final bang's columns of `sweep.csv` (empty cells for a run stopped before the
-/// bang): what it received and dissipated, the split of what it dissipated by mechanism
-/// (fractions), its observables, and what ended it.
-pub const BANG_COLUMNS: [&str; 17] = [
-    "bang_kinetic_in_j",
-    "bang_dissipated_j",
-    "bang_floor_normal_of",
-    "bang_floor_friction_of",
-    "bang_joints_of",
-    "bang_freeze_of",
-    "bang_residual_of",
-    "bang_numerical_of",
-    "bang_top_speed_m_s",
-    "bang_duration_s",
-    "bang_peak_floor_force_n",
-    "bang_floor_impulse_n_s",
-    "bang_end_x_m",
-    "bang_laid_length_m",
-    "bang_still_moving_of",
-    "bang_wall_s",
-    "bang_ended_by",
-];
+impl Col {
+    /// The columns before the milestones' errors.
+    const HEAD: [Self; 7] = [
+        Self::Links,
+        Self::Steps,
+        Self::Jobs,
+        Self::Wall,
+        Self::WallRolling,
+        Self::SimTime,
+        Self::BangTime,
+    ];
+    /// The columns after them, the bang's and the status excepted.
+    const MID: [Self; 12] = [
+        Self::MaxErrGeo,
+        Self::MaxErrEq7,
+        Self::E0,
+        Self::LostBeforeBang,
+        Self::LostBeforeBangOfE0,
+        Self::LostBefore2bOfE0,
+        Self::MaxEnergyRiseRel,
+        Self::PeakXdot,
+        Self::PeakR,
+        Self::LiftOffR,
+        Self::LeavesExactR,
+        Self::ExactHopsR,
+    ];
+    /// The final bang's columns (empty cells for a run stopped before the bang): what it
+    /// received and dissipated, the split of what it dissipated by mechanism (fractions), its
+    /// observables, and what ended it.
+    pub const BANG: [Self; 17] = [
+        Self::BangKineticIn,
+        Self::BangDissipated,
+        Self::BangFloorNormalOf,
+        Self::BangFloorFrictionOf,
+        Self::BangJointsOf,
+        Self::BangFreezeOf,
+        Self::BangResidualOf,
+        Self::BangNumericalOf,
+        Self::BangTopSpeed,
+        Self::BangDuration,
+        Self::BangPeakFloorForce,
+        Self::BangFloorImpulse,
+        Self::BangEndX,
+        Self::BangLaidLength,
+        Self::BangStillMovingOf,
+        Self::BangWall,
+        Self::BangEndedBy,
+    ];
+
+    /// The column's name in `sweep.csv`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Index => INDEX_COLUMN,
+            Self::Links => "links",
+            Self::Steps => "steps",
+            Self::Jobs => "jobs",
+            Self::Wall => "wall_s",
+            Self::WallRolling => "wall_rolling_s",
+            Self::SimTime => "sim_time_s",
+            Self::BangTime => "bang_time_s",
+            Self::MaxErrGeo => "max_err_geo",
+            Self::MaxErrEq7 => "max_err_eq7",
+            Self::E0 => "e0_j",
+            Self::LostBeforeBang => "lost_before_bang_j",
+            Self::LostBeforeBangOfE0 => "lost_before_bang_of_e0",
+            Self::LostBefore2bOfE0 => "lost_before_2b_of_e0",
+            Self::MaxEnergyRiseRel => "max_energy_rise_rel",
+            Self::PeakXdot => "peak_xdot_m_s",
+            Self::PeakR => "peak_r_m",
+            Self::LiftOffR => "lift_off_r_m",
+            Self::LeavesExactR => "leaves_exact_r_m",
+            Self::ExactHopsR => "exact_hops_r_m",
+            Self::BangKineticIn => "bang_kinetic_in_j",
+            Self::BangDissipated => "bang_dissipated_j",
+            Self::BangFloorNormalOf => "bang_floor_normal_of",
+            Self::BangFloorFrictionOf => "bang_floor_friction_of",
+            Self::BangJointsOf => "bang_joints_of",
+            Self::BangFreezeOf => "bang_freeze_of",
+            Self::BangResidualOf => "bang_residual_of",
+            Self::BangNumericalOf => "bang_numerical_of",
+            Self::BangTopSpeed => "bang_top_speed_m_s",
+            Self::BangDuration => "bang_duration_s",
+            Self::BangPeakFloorForce => "bang_peak_floor_force_n",
+            Self::BangFloorImpulse => "bang_floor_impulse_n_s",
+            Self::BangEndX => "bang_end_x_m",
+            Self::BangLaidLength => "bang_laid_length_m",
+            Self::BangStillMovingOf => "bang_still_moving_of",
+            Self::BangWall => "bang_wall_s",
+            Self::BangEndedBy => "bang_ended_by",
+            Self::Status => STATUS_COLUMN,
+        }
+    }
+
+    /// The column's cell for a finished run of a sweep that ran `jobs` at once; empty where
+    /// the run has no such figure. The index is the grid's, not the run's: empty here.
+    fn cell(self, report: &RunReport, jobs: usize) -> String {
+        let l = &report.ledger;
+        let milestones = &report.milestones;
+        let limit = |kind: LimitKind| {
+            report
+                .reference_limits
+                .iter()
+                .find(|l| l.kind == kind && l.t_s.is_some())
+                .map(|l| l.r_m)
+        };
+        match self {
+            Self::Index => String::new(),
+            Self::Links => report.links.to_string(),
+            Self::Steps => report.steps.to_string(),
+            Self::Jobs => jobs.to_string(),
+            Self::Wall => num(report.wall_time_s),
+            Self::WallRolling => num(report.wall_time_rolling_s),
+            Self::SimTime => num(report.sim_time_s),
+            Self::BangTime => opt(l.bang_time_s),
+            Self::MaxErrGeo => opt(max_abs(milestones.iter().map(|m| m.err_vs_geo))),
+            Self::MaxErrEq7 => opt(max_abs(milestones.iter().map(|m| m.err_vs_eq7))),
+            Self::E0 => num(l.e0_j),
+            Self::LostBeforeBang => num(l.lost_before_bang_j),
+            Self::LostBeforeBangOfE0 => num(l.lost_before_bang_j / l.e0_j),
+            Self::LostBefore2bOfE0 => opt(milestones
+                .iter()
+                .find(|m| m.key == MilestoneKey::TwoB)
+                .and_then(|m| m.dissipated_j)
+                .map(|d| d / l.e0_j)),
+            Self::MaxEnergyRiseRel => num(report.max_energy_rise_rel),
+            Self::PeakXdot => num(report.approach.peak_xdot_m_s),
+            Self::PeakR => num(report.approach.peak_r_m),
+            Self::LiftOffR => opt(limit(LimitKind::LiftOff)),
+            Self::LeavesExactR => opt(limit(LimitKind::LeavesExact)),
+            Self::ExactHopsR => opt(limit(LimitKind::ExactModelHops)),
+            Self::Status => RowStatus::of(&report.stop).to_string(),
+            bang => bang.bang_cell(report),
+        }
+    }
+
+    /// A [`Col::BANG`] cell of a finished run.
+    fn bang_cell(self, report: &RunReport) -> String {
+        let Some(b) = &report.bang else {
+            return String::new();
+        };
+        let l = &report.ledger;
+        let of = |x: f64| num(x / l.dissipated_by_bang_j);
+        let split = &l.bang;
+        match self {
+            Self::BangKineticIn => num(b.kinetic_in_j),
+            Self::BangDissipated => num(l.dissipated_by_bang_j),
+            Self::BangFloorNormalOf => of(split.floor_normal_j),
+            Self::BangFloorFrictionOf => of(split.floor_friction_j),
+            Self::BangJointsOf => of(split.joints_j),
+            Self::BangFreezeOf => of(split.freeze_j),
+            Self::BangResidualOf => of(split.residual_j),
+            Self::BangNumericalOf => of(split.numerical_j()),
+            Self::BangTopSpeed => num(b.top_speed_m_s),
+            Self::BangDuration => num(b.duration_s),
+            Self::BangPeakFloorForce => num(b.peak_floor_force_n),
+            Self::BangFloorImpulse => num(b.floor_impulse_n_s),
+            Self::BangEndX => num(b.end_x_m),
+            Self::BangLaidLength => num(b.laid_length_m),
+            Self::BangStillMovingOf => num(b.still_moving_j / b.kinetic_in_j),
+            Self::BangWall => num(report.wall_time_s - report.wall_time_rolling_s),
+            Self::BangEndedBy => b.ended_by.map_or_else(String::new, |e| {
+                match e {
+                    crate::model::BangEnd::Rest => "rest",
+                    crate::model::BangEnd::Cap => "cap",
+                }
+                .to_owned()
+            }),
+            _ => unreachable!("{self:?} is not a bang column"),
+        }
+    }
+}
+
+/// The prefix of the milestones' time errors against the exact-geometry model:
+/// `err_geo_<label>`.
+pub const ERR_GEO_PREFIX: &str = "err_geo_";
+/// The prefix of the milestones' time errors against eq. (7): `err_eq7_<label>`.
+pub const ERR_EQ7_PREFIX: &str = "err_eq7_";
+
+/// Column names after the varied keys, for a scene's milestone labels.
+pub fn result_columns(milestone_labels: &[String]) -> Vec<String> {
+    let names = |cols: &[Col]| cols.iter().map(|c| c.name().to_owned()).collect::<Vec<_>>();
+    let mut c = names(&Col::HEAD);
+    c.extend(
+        milestone_labels
+            .iter()
+            .map(|l| format!("{ERR_GEO_PREFIX}{l}")),
+    );
+    c.extend(
+        milestone_labels
+            .iter()
+            .map(|l| format!("{ERR_EQ7_PREFIX}{l}")),
+    );
+    c.extend(names(&Col::MID));
+    c.extend(names(&Col::BANG));
+    c.push(Col::Status.name().to_owned());
+    c
+}
 
 /// The header of `sweep.csv`: index, the varied keys, then [`result_columns`].
 pub fn header(keys: &[String], milestone_labels: &[String]) -> Vec<String> {
@@ -182,88 +397,44 @@ fn max_abs(errs: impl Iterator<Item = Option<f64>>) -> Option<f64> {
 
 /// The result cells of a finished run, in [`result_columns`] order.
 pub fn result_cells(report: &RunReport, jobs: usize) -> Vec<String> {
-    let l = &report.ledger;
-    let mut c = vec![
-        report.links.to_string(),
-        report.steps.to_string(),
-        jobs.to_string(),
-        num(report.wall_time_s),
-        num(report.wall_time_rolling_s),
-        num(report.sim_time_s),
-        opt(l.bang_time_s),
-    ];
+    let cells = |cols: &[Col]| {
+        cols.iter()
+            .map(|c| c.cell(report, jobs))
+            .collect::<Vec<_>>()
+    };
+    let mut c = cells(&Col::HEAD);
     c.extend(report.milestones.iter().map(|m| opt(m.err_vs_geo)));
     c.extend(report.milestones.iter().map(|m| opt(m.err_vs_eq7)));
-    c.push(opt(max_abs(report.milestones.iter().map(|m| m.err_vs_geo))));
-    c.push(opt(max_abs(report.milestones.iter().map(|m| m.err_vs_eq7))));
-    c.push(num(l.e0_j));
-    c.push(num(l.lost_before_bang_j));
-    c.push(num(l.lost_before_bang_j / l.e0_j));
-    c.push(opt(report
-        .milestones
-        .iter()
-        .find(|m| m.key == MilestoneKey::TwoB)
-        .and_then(|m| m.dissipated_j)
-        .map(|d| d / l.e0_j)));
-    c.push(num(report.max_energy_rise_rel));
-    c.push(num(report.approach.peak_xdot_m_s));
-    c.push(num(report.approach.peak_r_m));
-    for kind in [
-        LimitKind::LiftOff,
-        LimitKind::LeavesExact,
-        LimitKind::ExactModelHops,
-    ] {
-        let r = report
-            .reference_limits
-            .iter()
-            .find(|l| l.kind == kind && l.t_s.is_some())
-            .map(|l| l.r_m);
-        c.push(opt(r));
-    }
-    c.extend(bang_cells(report));
-    c.push(RowStatus::of(&report.stop).to_string());
+    c.extend(cells(&Col::MID));
+    c.extend(cells(&Col::BANG));
+    c.push(Col::Status.cell(report, jobs));
     c
-}
-
-/// The [`BANG_COLUMNS`] cells of a finished run.
-fn bang_cells(report: &RunReport) -> Vec<String> {
-    let Some(b) = &report.bang else {
-        return vec![String::new(); BANG_COLUMNS.len()];
-    };
-    let l = &report.ledger;
-    let d = l.dissipated_by_bang_j;
-    let of = |x: f64| num(x / d);
-    let split = &l.bang;
-    vec![
-        num(b.kinetic_in_j),
-        num(d),
-        of(split.floor_normal_j),
-        of(split.floor_friction_j),
-        of(split.joints_j),
-        of(split.freeze_j),
-        of(split.residual_j),
-        of(split.numerical_j()),
-        num(b.top_speed_m_s),
-        num(b.duration_s),
-        num(b.peak_floor_force_n),
-        num(b.floor_impulse_n_s),
-        num(b.end_x_m),
-        num(b.laid_length_m),
-        num(b.still_moving_j / b.kinetic_in_j),
-        num(report.wall_time_s - report.wall_time_rolling_s),
-        b.ended_by.map_or_else(String::new, |e| {
-            match e {
-                crate::model::BangEnd::Rest => "rest",
-                crate::model::BangEnd::Cap => "cap",
-            }
-            .to_owned()
-        }),
-    ]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_row_has_a_cell_under_every_column() {
+        let mut scene = crate::scene::Scene::from_toml_str(
+            "[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\nmass_kg = 1.5\n\
+             [push]\ncontact_speed_m_s = 0.3\n[stop]\nmax_time_s = 0.02\n",
+            "short",
+        )
+        .unwrap();
+        scene.output.scene_rate_hz = 0.0;
+        let report = crate::run::run(&scene, &mut []).unwrap();
+        let labels: Vec<String> = report.milestones.iter().map(|m| m.label.clone()).collect();
+        let columns = result_columns(&labels);
+        let cells = result_cells(&report, 1);
+        assert_eq!(columns.len(), cells.len());
+        let at = |c: Col| cells[columns.iter().position(|n| n == c.name()).unwrap()].clone();
+        assert_eq!(at(Col::Links), report.links.to_string());
+        assert_eq!(at(Col::Status).parse::<RowStatus>(), Ok(RowStatus::MaxTime));
+        // Stopped before the bang: every bang cell empty.
+        assert!(Col::BANG.iter().all(|&c| at(c).is_empty()));
+    }
 
     #[test]
     fn max_abs_needs_every_milestone() {

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 
-use super::{INDEX_COLUMN, Shard, file_name};
+use super::{Col, INDEX_COLUMN, Shard, file_name};
 use crate::output::write_atomic;
 
 /// One CSV line (no line break) of `cells`, quoted where a cell needs it (the `csv`
@@ -86,6 +86,11 @@ impl SweepTable {
     /// The index of column `name`.
     pub fn column(&self, name: &str) -> Option<usize> {
         self.header.iter().position(|h| h == name)
+    }
+
+    /// The cells of the result column `col` parsed as numbers, as [`numbers`](Self::numbers).
+    pub fn col(&self, col: Col) -> Option<Vec<f64>> {
+        self.numbers(col.name())
     }
 
     /// The cells of column `name` parsed as numbers (`NaN` where empty or not a number).
