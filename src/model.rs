@@ -26,7 +26,6 @@
 //!
 //! Every change of energy is measured where it happens, into an [`EnergyLedger`].
 
-use std::collections::VecDeque;
 use std::f64::consts::PI;
 
 use rapier2d_f64::prelude::*;
@@ -40,11 +39,13 @@ mod build;
 pub mod folded;
 mod impulses;
 mod observe;
+mod parts;
 mod shed;
 mod work;
 
-use build::{CoilSums, Link, Piece};
+use build::{CoilSums, Piece};
 pub use impulses::{AngularImpulses, StepImpulses};
+use parts::{Accounts, Chain, Coil, Settings};
 pub use work::BangLedger;
 
 /// What ended the final bang.
@@ -185,79 +186,23 @@ const FLOOR_GROUP: Group = Group::GROUP_2;
 /// The contact-resolved tape.
 pub struct Model {
     world: PhysicsWorld,
-    spiral: Spiral,
-    moments: SpiralMoments,
-    links: Vec<Link>,
-    /// Each link's near and far node in the frame of the body that holds it (m): the
-    /// spiral's coordinates while it is wound or in a piece spawned from the coil, the
-    /// world's in a piece joined from moving links.
-    local: Vec<[Vector; 2]>,
-    link_angle: f64,
-    steps_per_link: f64,
-    max_dt: f64,
-    freeze_speed: f64,
-    bang_step_rad: f64,
-    /// Shortest piece the remaining wound links are grouped into at the release (m).
-    bang_piece_m: f64,
-    /// How far above the floor's contact plane a piece is pinned in the bang (m).
-    pin_lift_m: f64,
-    /// Softness of every joint (see `Solver::joint_hz`).
-    joint_softness: SpringCoefficients<Real>,
-    /// Softness of every joint from the release on (see `Solver::bang_joint_hz`).
-    bang_joint_softness: SpringCoefficients<Real>,
-    friction: f64,
-    /// Gravity across the floor, `g cos(alpha)`, pulling towards it (m/s^2).
-    g: f64,
-    /// Gravity along the floor, `g sin(alpha)`, towards +x (m/s^2); 0 on a level floor.
-    g_along: f64,
-    /// First moment `sum m_k x_k` of the tape lying flat from `x = 0` (kg m).
-    flat_first_moment: f64,
-    half_b: f64,
-    bang_fraction: f64,
-    bang_iterations: usize,
-    bang_relax_iterations: usize,
-    bang_cap_s: f64,
-    rest_fraction: f64,
-    total_mass: f64,
-
+    /// What the scene fixed.
+    settings: Settings,
+    /// The wound coil.
+    coil: Coil,
+    /// The links off the coil: moving, frozen.
+    chain: Chain,
+    /// The energy's books.
+    accounts: Accounts,
+    /// The final bang's record.
+    bang: BangRecord,
     ground: RigidBodyHandle,
     floor: ColliderHandle,
-    coil: Option<RigidBodyHandle>,
-    coil_ball: Option<ColliderHandle>,
-    /// A sticky floor's hold on the coil, moved every step: no slip at the contact line
-    /// (x locked) and the contact ball's centre at its height (y locked).
-    stick: Option<[ImpulseJointHandle; 2]>,
-    coil_sums: CoilSums,
-    /// Index of the outermost link still in the coil.
-    first_attached: usize,
-    /// Unwrapped rotation angle of the coil (rad).
-    coil_angle: f64,
-    /// The coil's rotation minus that of a rolling coil with the same point leaving it:
-    /// 0 on the floor, pi/2 on a fixed axis, where the tape leaves at the side (rad).
-    angle_offset: f64,
-    psi_low: f64,
-
-    free: VecDeque<Piece>,
-    frozen_potential_j: f64,
-    /// Near node of each frozen link, from the outer end, and the far node of the last one
-    /// (world frame, m): frozen links have no body left to ask.
-    frozen_nodes: Vec<[f64; 2]>,
-
-    ledger: EnergyLedger,
-    bang: BangRecord,
     phase: Phase,
     t: f64,
     last_dt: f64,
     x_low: f64,
-    chord_ratio: f64,
     shedding: bool,
-    /// Kinetic plus potential energy at the last observation, the next step's start (J).
-    energy_j: f64,
-    /// The last step's impulses on the moving part.
-    impulses: StepImpulses,
-    /// The moving part's angular momentum about the origin over the last step, from how
-    /// far it moved (kg m^2/s): see [`Self::moved_angular_momentum`].
-    moved_angular_momentum: f64,
 }
 
 impl Model {
@@ -282,74 +227,62 @@ impl Model {
         let (psi_low, coil_angle, angle_offset) = (start.psi_low, start.angle, start.angle_offset);
         let bang_fraction = build::bang_fraction(scene, &spiral, &moments);
         let flat_first_moment = build::flat_first_moment(&links);
-        let local = links
-            .iter()
-            .map(|l| {
-                [
-                    Vector::new(l.near[0], l.near[1]),
-                    Vector::new(l.far[0], l.far[1]),
-                ]
-            })
-            .collect();
         let mut model = Self {
             world,
-            spiral,
-            moments,
-            links,
-            local,
-            link_angle: 2.0 * PI / f64::from(scene.discretisation.links_per_turn),
-            steps_per_link: scene.solver.steps_per_link,
-            max_dt: scene.solver.max_dt_s,
-            freeze_speed: scene.solver.freeze_speed_m_s,
-            bang_step_rad: scene.solver.bang_step_rad,
-            bang_piece_m: scene.solver.bang_piece_m,
-            pin_lift_m: PIN_LIFT_PER_RADIUS * tape.outer_radius_m,
-            joint_softness: SpringCoefficients::new(
-                scene.solver.joint_hz,
-                SpringCoefficients::<Real>::joint_defaults().damping_ratio,
-            ),
-            bang_joint_softness: SpringCoefficients::new(
-                scene.solver.bang_joint_hz,
-                SpringCoefficients::<Real>::joint_defaults().damping_ratio,
-            ),
-            friction: scene.floor.friction,
-            g: g_perp,
-            g_along,
-            flat_first_moment,
-            half_b: 0.5 * b,
-            bang_fraction,
-            bang_iterations: scene.solver.bang_iterations as usize,
-            bang_relax_iterations: scene.solver.bang_relax_iterations as usize,
-            bang_cap_s: scene.stop.bang_cap_s,
-            rest_fraction: scene.stop.rest_fraction,
-            total_mass: tape.mass_kg,
+            settings: Settings {
+                link_angle: 2.0 * PI / f64::from(scene.discretisation.links_per_turn),
+                steps_per_link: scene.solver.steps_per_link,
+                max_dt: scene.solver.max_dt_s,
+                freeze_speed: scene.solver.freeze_speed_m_s,
+                bang_step_rad: scene.solver.bang_step_rad,
+                bang_piece_m: scene.solver.bang_piece_m,
+                pin_lift_m: PIN_LIFT_PER_RADIUS * tape.outer_radius_m,
+                joint_softness: SpringCoefficients::new(
+                    scene.solver.joint_hz,
+                    SpringCoefficients::<Real>::joint_defaults().damping_ratio,
+                ),
+                bang_joint_softness: SpringCoefficients::new(
+                    scene.solver.bang_joint_hz,
+                    SpringCoefficients::<Real>::joint_defaults().damping_ratio,
+                ),
+                friction: scene.floor.friction,
+                g: g_perp,
+                g_along,
+                flat_first_moment,
+                half_b: 0.5 * b,
+                bang_fraction,
+                bang_iterations: scene.solver.bang_iterations as usize,
+                bang_relax_iterations: scene.solver.bang_relax_iterations as usize,
+                bang_cap_s: scene.stop.bang_cap_s,
+                rest_fraction: scene.stop.rest_fraction,
+                total_mass: tape.mass_kg,
+            },
+            coil: Coil {
+                spiral,
+                moments,
+                body: Some(coil),
+                ball: Some(coil_ball),
+                stick,
+                sums: coil_sums,
+                first_attached: 0,
+                angle: coil_angle,
+                angle_offset,
+                psi_low,
+                chord_ratio: first.chord_ratio,
+            },
+            chain: Chain::wound(links),
+            accounts: Accounts::default(),
+            bang: BangRecord::default(),
             ground,
             floor,
-            coil: Some(coil),
-            coil_ball: Some(coil_ball),
-            stick,
-            coil_sums,
-            first_attached: 0,
-            coil_angle,
-            angle_offset,
-            psi_low,
-            free: VecDeque::new(),
-            frozen_potential_j: 0.0,
-            frozen_nodes: Vec::new(),
-            ledger: EnergyLedger::default(),
-            bang: BangRecord::default(),
             phase: Phase::Rolling,
             t: 0.0,
             last_dt: 0.0,
             x_low: 0.0,
-            chord_ratio: first.chord_ratio,
             shedding: true,
-            energy_j: 0.0,
-            impulses: StepImpulses::default(),
-            moved_angular_momentum: 0.0,
         };
         model.restick();
-        model.energy_j = model.total_energy();
+        model.accounts.energy_j = model.total_energy();
         model
     }
 
@@ -366,13 +299,13 @@ impl Model {
 
     /// Number of links of the tape.
     pub fn link_count(&self) -> usize {
-        self.links.len()
+        self.chain.len()
     }
 
     /// Kinetic and potential energy of the whole tape (J).
     pub fn energy(&self) -> (f64, f64) {
         let mut kinetic = 0.0;
-        let mut potential = self.frozen_potential_j;
+        let mut potential = self.chain.frozen_potential_j;
         for (_, body) in self.world.bodies.iter() {
             if !body.is_dynamic() {
                 continue;
@@ -386,7 +319,7 @@ impl Model {
     /// Potential energy `-m g.p` of one body, gravity tilted on a slope (J).
     fn potential_of(&self, body: &RigidBody) -> f64 {
         let c = body.center_of_mass();
-        body.mass() * self.g * c.y - body.mass() * self.g_along * c.x
+        body.mass() * self.settings.g * c.y - body.mass() * self.settings.g_along * c.x
     }
 
     fn total_energy(&self) -> f64 {
@@ -408,13 +341,13 @@ impl Model {
         // While the coil rolls, the step resolves the shedding; in the bang no link is shed
         // and the step only has to keep the free links' rotations small.
         let turn = match self.phase {
-            Phase::Rolling => self.link_angle / self.steps_per_link,
-            _ => self.bang_step_rad,
+            Phase::Rolling => self.settings.link_angle / self.settings.steps_per_link,
+            _ => self.settings.bang_step_rad,
         };
         if spin > 0.0 {
-            (turn / spin).min(self.max_dt)
+            (turn / spin).min(self.settings.max_dt)
         } else {
-            self.max_dt
+            self.settings.max_dt
         }
     }
 
@@ -422,9 +355,10 @@ impl Model {
     pub fn step(&mut self) -> Observation {
         let dt = self.next_dt();
         self.world.integration_parameters.dt = dt;
-        let before = self.energy_j;
+        let before = self.accounts.energy_j;
         let states: Vec<BodyState> = if self.phase == Phase::Bang {
-            self.free
+            self.chain
+                .free
                 .iter()
                 .map(|l| BodyState::of(&self.world.bodies[l.body]))
                 .collect()
@@ -439,61 +373,52 @@ impl Model {
         let contacts: Vec<work::FloorImpulse> =
             work::floor_impulses(&self.world.narrow_phase, &self.world.colliders, self.floor)
                 .collect();
-        self.impulses = self.step_impulses(&moving, &contacts, dt);
-        self.moved_angular_momentum = self.moved_angular_momentum(&moving, dt);
+        self.accounts.impulses = self.step_impulses(&moving, &contacts, dt);
+        self.accounts.moved_angular_momentum = self.moved_angular_momentum(&moving, dt);
         let (kinetic, potential) = self.energy();
         let after = kinetic + potential;
         match self.phase {
-            Phase::Rolling => self.ledger.step_j += before - after,
+            Phase::Rolling => self.accounts.ledger.step_j += before - after,
             _ => self.book_bang_step(&states, &contacts, before - after, kinetic, dt),
         }
 
-        if let Some(coil) = self.coil {
+        if let Some(coil) = self.coil.body {
             let angle = self.world.bodies[coil].rotation().angle();
-            let mut d = angle - self.coil_angle;
+            let mut d = angle - self.coil.angle;
             d -= (d / (2.0 * PI)).round() * 2.0 * PI;
-            self.coil_angle += d;
-            self.psi_low = self
+            self.coil.angle += d;
+            self.coil.psi_low = self
+                .coil
                 .spiral
-                .lowest_psi(self.coil_angle - self.angle_offset, self.psi_low)
-                .clamp(self.spiral.psi_in, self.spiral.psi_out);
+                .lowest_psi(self.coil.angle - self.coil.angle_offset, self.coil.psi_low)
+                .clamp(self.coil.spiral.psi_in, self.coil.spiral.psi_out);
             while self.shedding
-                && self.first_attached + 1 < self.links.len()
-                && self.psi_low <= self.near_node_psi(self.first_attached)
+                && self.coil.first_attached + 1 < self.chain.len()
+                && self.coil.psi_low <= self.near_node_psi(self.coil.first_attached)
             {
                 self.detach_outermost();
             }
             self.refit_ball();
-            if self.laid_fraction() >= self.bang_fraction
-                || self.first_attached + 1 >= self.links.len()
+            if self.laid_fraction() >= self.settings.bang_fraction
+                || self.coil.first_attached + 1 >= self.chain.len()
             {
                 self.release_coil();
             }
         }
         self.freeze_settled();
-        if self.phase == Phase::Bang && self.t - self.bang.started_s >= self.bang_cap_s {
+        if self.phase == Phase::Bang && self.t - self.bang.started_s >= self.settings.bang_cap_s {
             self.end_bang(BangEnd::Cap);
         }
         self.observe()
     }
 
     fn near_node_psi(&self, k: usize) -> f64 {
-        if k == 0 {
-            self.spiral.psi_out
-        } else {
-            self.far_node_psi(k - 1)
-        }
-    }
-
-    fn far_node_psi(&self, k: usize) -> f64 {
-        // Nodes step inward by one link angle from the outer end.
-        let psi = self.spiral.psi_out - self.link_angle * (k + 1) as f64;
-        psi.max(self.spiral.psi_in)
+        self.coil.near_node_psi(k, self.settings.link_angle)
     }
 
     /// Laid mass fraction along the continuous spiral up to the lowest point.
     pub fn laid_fraction(&self) -> f64 {
-        1.0 - self.moments.at(self.psi_low)[0] / self.spiral.length()
+        self.coil.laid_fraction()
     }
 }
 

@@ -11,15 +11,15 @@ impl Model {
     /// motion is lost, and returned (J).
     pub(super) fn join_pieces(&mut self) -> f64 {
         let before = self.energy().0;
-        let parts: Vec<Piece> = self.free.drain(..).collect();
+        let parts: Vec<Piece> = self.chain.free.drain(..).collect();
         let mut groups: Vec<std::ops::Range<usize>> = Vec::new();
         let (mut start, mut length) = (0, 0.0);
         for (i, p) in parts.iter().enumerate() {
-            length += self.links[p.first..=p.last]
+            length += self.chain.links[p.first..=p.last]
                 .iter()
                 .map(|l| l.length_m)
                 .sum::<f64>();
-            if length >= self.bang_piece_m {
+            if length >= self.settings.bang_piece_m {
                 groups.push(start..i + 1);
                 start = i + 1;
                 length = 0.0;
@@ -55,7 +55,7 @@ impl Model {
             for part in group {
                 let pose = *self.world.bodies[part.body].position();
                 for k in part.first..=part.last {
-                    self.local[k] = self.local[k].map(|n| pose.transform_point(n));
+                    self.chain.local[k] = self.chain.local[k].map(|n| pose.transform_point(n));
                 }
                 self.world.remove_body(part.body);
             }
@@ -78,27 +78,27 @@ impl Model {
             };
             self.join_near_node(piece);
             self.lay_piece(piece);
-            self.free.push_back(piece);
+            self.chain.free.push_back(piece);
         }
         before - self.energy().0
     }
 
     /// Releases the remaining wound links as a free chain: the final bang begins.
     pub(super) fn release_coil(&mut self) {
-        let Some(coil) = self.coil else { return };
+        let Some(coil) = self.coil.body else { return };
         let (kinetic_in, potential_in) = self.energy();
         let before = kinetic_in + potential_in;
         self.phase = Phase::Bang;
         // From here on every joint, old and new, has the bang's softness.
-        self.joint_softness = self.bang_joint_softness;
+        self.settings.joint_softness = self.settings.bang_joint_softness;
         for (_, j) in self.world.impulse_joints.iter_mut() {
-            j.data.softness = self.bang_joint_softness;
+            j.data.softness = self.settings.bang_joint_softness;
         }
-        if let Some(prev) = self.free.back().copied() {
+        if let Some(prev) = self.chain.free.back().copied() {
             self.unpin_from_coil(prev.body, coil);
         }
         // The piece pinned to the world may swing in the bang: let it touch the floor.
-        if let Some(first) = self.free.front().copied() {
+        if let Some(first) = self.chain.free.front().copied() {
             let pins: Vec<_> = self
                 .world
                 .impulse_joints
@@ -111,15 +111,15 @@ impl Model {
                 }
             }
         }
-        for k in self.first_attached..self.links.len() {
+        for k in self.coil.first_attached..self.chain.len() {
             let piece = self.spawn_piece(k, k, coil);
             self.join_near_node(piece);
-            self.free.push_back(piece);
+            self.chain.free.push_back(piece);
         }
         self.world.remove_body(coil);
-        self.coil = None;
-        self.coil_ball = None;
-        self.first_attached = self.links.len();
+        self.coil.body = None;
+        self.coil.ball = None;
+        self.coil.first_attached = self.chain.len();
         // The engine leaves the joints a few microns apart under tension; closing those gaps
         // later, under the bang's far larger tension, would do work on the tape. Close them
         // now, by position alone, then join the links into the bang's pieces. Joining pins
@@ -130,15 +130,15 @@ impl Model {
         self.close_gaps();
         self.bang.ledger.freeze_j += joined_j;
         let params = &mut self.world.integration_parameters;
-        params.num_solver_iterations = self.bang_iterations;
-        params.num_internal_stabilization_iterations = self.bang_relax_iterations;
+        params.num_solver_iterations = self.settings.bang_iterations;
+        params.num_internal_stabilization_iterations = self.settings.bang_relax_iterations;
         let (kinetic, potential) = self.energy();
         self.bang.started_s = self.t;
         self.bang.kinetic_in_j = kinetic_in;
         // Spawning copies the velocity field, so this is the joining's loss, but for closing
         // the gaps, which moves the links by microns.
         let release_j = before - kinetic - potential;
-        self.ledger.bang_j += release_j;
+        self.accounts.ledger.bang_j += release_j;
         self.bang.ledger.residual_j += release_j - joined_j;
     }
 
@@ -155,19 +155,23 @@ impl Model {
         kinetic: f64,
         dt: f64,
     ) {
-        self.ledger.bang_j += lost_j;
-        if self.free.is_empty() {
+        self.accounts.ledger.bang_j += lost_j;
+        if self.chain.free.is_empty() {
             // Everything is frozen: at rest.
             self.bang.ledger.residual_j += lost_j;
             self.end_bang(BangEnd::Rest);
             return;
         }
-        let bodies = work::moved(&self.world.bodies, self.free.iter().map(|p| p.body), before);
+        let bodies = work::moved(
+            &self.world.bodies,
+            self.chain.free.iter().map(|p| p.body),
+            before,
+        );
         let floor: Vec<_> = contacts
             .iter()
             .filter_map(|&c| {
                 let k = self.world.bodies.get(c.body)?.user_data as usize;
-                let i = self.free.binary_search_by_key(&k, |p| p.first).ok()?;
+                let i = self.chain.free.binary_search_by_key(&k, |p| p.first).ok()?;
                 Some((i, c))
             })
             .collect();
@@ -177,14 +181,16 @@ impl Model {
         // the centre of mass's height above where it would lie (never negative: on a fixed
         // axis the tape hangs far above a floor it cannot reach).
         let raised_j: f64 = self
+            .chain
             .free
             .iter()
             .map(|p| {
                 let body = &self.world.bodies[p.body];
-                body.mass() * self.g * (body.center_of_mass().y - p.rest_y_m).max(0.0)
+                body.mass() * self.settings.g * (body.center_of_mass().y - p.rest_y_m).max(0.0)
             })
             .sum();
         let top_speed = self
+            .chain
             .free
             .iter()
             .flat_map(|&p| {
@@ -205,7 +211,7 @@ impl Model {
         if dt > 0.0 {
             b.peak_floor_force_n = b.peak_floor_force_n.max(impulse / dt);
         }
-        if kinetic + raised_j < self.rest_fraction * b.kinetic_in_j {
+        if kinetic + raised_j < self.settings.rest_fraction * b.kinetic_in_j {
             self.end_bang(BangEnd::Rest);
         }
     }
@@ -227,7 +233,7 @@ impl Model {
         let before = self.total_energy();
         self.close_gaps();
         let moved_j = before - self.total_energy();
-        self.ledger.bang_j += moved_j;
+        self.accounts.ledger.bang_j += moved_j;
         self.bang.ledger.residual_j += moved_j;
     }
 
@@ -235,16 +241,19 @@ impl Model {
     /// on, so that its near node meets what holds it; velocities are untouched.
     pub(super) fn close_gaps(&mut self) {
         // The first piece meets the world pin's anchor, if it has one.
-        let mut target: Option<Vector> = self.free.front().and_then(|first| {
+        let mut target: Option<Vector> = self.chain.free.front().and_then(|first| {
             self.world
                 .impulse_joints
                 .joints_between(self.ground, first.body)
                 .map(|(_, j)| j.data.local_anchor1())
                 .last()
         });
-        for i in 0..self.free.len() {
-            let piece = self.free[i];
-            let [near, far] = [self.local[piece.first][0], self.local[piece.last][1]];
+        for i in 0..self.chain.free.len() {
+            let piece = self.chain.free[i];
+            let [near, far] = [
+                self.chain.local[piece.first][0],
+                self.chain.local[piece.last][1],
+            ];
             let body = &mut self.world.bodies[piece.body];
             let pose = *body.position();
             if let Some(t) = target {

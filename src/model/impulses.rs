@@ -107,10 +107,11 @@ impl Model {
     /// The bodies of the moving part while the coil rolls: the coil, and the link hanging
     /// from it if it has not been laid (it has no floor contact yet). Empty after the release.
     pub(super) fn moving_part(&self) -> Vec<RigidBodyHandle> {
-        let Some(coil) = self.coil else {
+        let Some(coil) = self.coil.body else {
             return Vec::new();
         };
         let hanging = self
+            .chain
             .free
             .back()
             .filter(|p| self.world.bodies[p.body].colliders().is_empty())
@@ -129,7 +130,7 @@ impl Model {
 
     /// The paper's origin: the laid tape's outer end, on the floor's contact plane.
     pub(super) fn origin(&self) -> Vector {
-        Vector::new(0.0, self.half_b)
+        Vector::new(0.0, self.settings.half_b)
     }
 
     /// Angular momentum of some bodies about the origin, counter-clockwise (kg m^2/s).
@@ -148,13 +149,13 @@ impl Model {
     /// Where the laid tape pulls on the moving part: the hanging link's near node, or, if
     /// the last link to leave has been laid, the coil's node it is joined at (world, m).
     pub(super) fn pull_point(&self) -> Option<Vector> {
-        self.coil?;
-        let p = self.free.back()?;
+        self.coil.body?;
+        let p = self.chain.free.back()?;
         let body = &self.world.bodies[p.body];
         let node = if body.colliders().is_empty() {
-            self.local[p.first][0]
+            self.chain.local[p.first][0]
         } else {
-            self.local[p.last][1]
+            self.chain.local[p.last][1]
         };
         Some(body.position().transform_point(node))
     }
@@ -221,7 +222,7 @@ impl Model {
             let f = c.normal + c.friction;
             out.floor_on_moving[0] += f.x;
             out.floor_on_moving[1] += f.y;
-            if Some(c.body) == self.coil
+            if Some(c.body) == self.coil.body
                 && let Some(i) = moving.iter().position(|&h| h == c.body)
             {
                 out.floor_on_coil[0] += f.x;
@@ -308,7 +309,7 @@ mod tests {
         for _ in 0..300 {
             model.step();
         }
-        let coil = model.coil.unwrap();
+        let coil = model.coil.body.unwrap();
         let (mut moved, mut reported, mut dt) = (0.0, 0.0, 0.0);
         for _ in 0..100 {
             let c0 = model.world.bodies[coil].center_of_mass();

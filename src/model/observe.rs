@@ -35,18 +35,18 @@ impl Model {
     /// The state after the last step.
     pub fn observe(&mut self) -> Observation {
         let (kinetic_j, potential_j) = self.energy();
-        self.energy_j = kinetic_j + potential_j;
+        self.accounts.energy_j = kinetic_j + potential_j;
         // The floor's force on everything that moves over the last step.
         let (normal_n, friction_n) = if self.last_dt > 0.0 {
-            let f = self.impulses.floor_on_moving;
+            let f = self.accounts.impulses.floor_on_moving;
             (f[1] / self.last_dt, f[0] / self.last_dt)
         } else {
             (0.0, 0.0)
         };
-        let (x_m, omega) = match self.coil {
+        let (x_m, omega) = match self.coil.body {
             Some(coil) => {
                 let body = &self.world.bodies[coil];
-                let p = self.spiral.point(self.psi_low);
+                let p = self.coil.spiral.point(self.coil.psi_low);
                 (
                     body.position().transform_point(Vector::new(p[0], p[1])).x,
                     -body.angvel(),
@@ -59,22 +59,22 @@ impl Model {
             t_s: self.t,
             phase: self.phase,
             laid_fraction: self.laid_fraction(),
-            psi_low: self.psi_low,
+            psi_low: self.coil.psi_low,
             x_m,
             omega_rad_s: omega,
             kinetic_j,
             potential_j,
             normal_n,
             friction_n,
-            ledger: self.ledger,
+            ledger: self.accounts.ledger,
             bang: self.bang,
-            detached: self.first_attached,
+            detached: self.coil.first_attached,
             active_bodies: self.world.bodies.len() - 1,
             max_joint_gap_m: self.max_joint_gap(),
             max_penetration_m: self.max_penetration(),
             dt_s: self.last_dt,
-            angular_momentum_o: self.moved_angular_momentum,
-            impulses: self.impulses,
+            angular_momentum_o: self.accounts.moved_angular_momentum,
+            impulses: self.accounts.impulses,
         }
     }
 
@@ -82,8 +82,8 @@ impl Model {
     /// the tape's outer end through the frozen and the moving links. Consecutive nodes bound
     /// one link; empty while no link has left.
     pub fn off_coil_nodes(&self) -> Vec<[f64; 2]> {
-        let mut off = self.frozen_nodes.clone();
-        for (i, &piece) in self.free.iter().enumerate() {
+        let mut off = self.chain.frozen_nodes.clone();
+        for (i, &piece) in self.chain.free.iter().enumerate() {
             if i == 0 {
                 // The first moving piece's near node replaces the last frozen far node.
                 off.pop();
@@ -91,7 +91,7 @@ impl Model {
             let pose = self.world.bodies[piece.body].position();
             let nodes = self.piece_nodes(piece).map(|n| pose.transform_point(n));
             // Each piece's far node is the next one's near node.
-            let skip_far = usize::from(i + 1 < self.free.len());
+            let skip_far = usize::from(i + 1 < self.chain.free.len());
             let count = piece.last - piece.first + 2 - skip_far;
             off.extend(nodes.take(count).map(|p| [p.x, p.y]));
         }
@@ -103,9 +103,9 @@ impl Model {
     /// The coil is one rigid body, so the nodes stay the same while it rolls, and a drawing
     /// of them changes only where the tape leaves it.
     pub fn wound_nodes(&self) -> Option<Placed> {
-        let coil = self.coil?;
+        let coil = self.coil.body?;
         let body = &self.world.bodies[coil];
-        let attached = &self.links[self.first_attached..];
+        let attached = &self.chain.links[self.coil.first_attached..];
         let points_m = attached
             .iter()
             .rev()
@@ -122,12 +122,12 @@ impl Model {
 
     /// Where the tape's free (inner) end is: x of its innermost node (m).
     pub fn tape_end_x_m(&self) -> f64 {
-        if let Some(&piece) = self.free.back() {
+        if let Some(&piece) = self.chain.free.back() {
             let pose = self.world.bodies[piece.body].position();
-            return pose.transform_point(self.local[piece.last][1]).x;
+            return pose.transform_point(self.chain.local[piece.last][1]).x;
         }
-        if self.coil.is_none()
-            && let Some(n) = self.frozen_nodes.last()
+        if self.coil.body.is_none()
+            && let Some(n) = self.chain.frozen_nodes.last()
         {
             return n[0];
         }
@@ -138,20 +138,21 @@ impl Model {
 
     /// The tape's midline length as the links lay it: the sum of their lengths (m).
     pub fn tape_length_m(&self) -> f64 {
-        self.links.iter().map(|l| l.length_m).sum()
+        self.chain.links.iter().map(|l| l.length_m).sum()
     }
 
     /// Potential energy of the tape lying flat, midline at `b/2`, from `x = 0` on (J).
     pub fn flat_potential_j(&self) -> f64 {
-        self.total_mass * self.g * self.half_b - self.g_along * self.flat_first_moment
+        self.settings.total_mass * self.settings.g * self.settings.half_b
+            - self.settings.g_along * self.settings.flat_first_moment
     }
 
     /// What the run's guards read after a step: slip at the rolling contact, how far the
     /// bodies have gone, their fastest spin, and whether every body state is finite.
     pub fn health(&self) -> Health {
-        let slip_m_s = self.coil.map(|coil| {
+        let slip_m_s = self.coil.body.map(|coil| {
             let body = &self.world.bodies[coil];
-            let p = self.spiral.point(self.psi_low);
+            let p = self.coil.spiral.point(self.coil.psi_low);
             let contact = body.position().transform_point(Vector::new(p[0], p[1]));
             body.velocity_at_point(contact).x
         });
