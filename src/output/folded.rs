@@ -9,7 +9,7 @@ use std::sync::atomic::AtomicBool;
 use anyhow::Context as _;
 use serde::Serialize;
 
-use crate::output::folder::{REPORT, RunFolder, SAMPLES};
+use crate::output::folder::{FileStamp, REPORT, RunFolder, SAMPLES};
 use crate::output::table::Table;
 use crate::output::{partial_path, write_atomic};
 use crate::run::folded::{ChainEnd, ChainReport, Crossing, run_chain};
@@ -21,6 +21,9 @@ struct Written<'a> {
     kind: &'static str,
     scene: &'a FoldedChain,
     report: &'a ChainReport,
+    /// The run's id and the files it was written with, as a coil's `report.json` has them.
+    run_id: &'a str,
+    files: std::collections::BTreeMap<&'static str, FileStamp>,
 }
 
 /// Runs `scene` into `folder` (taken for it, so emptied of earlier runs' files):
@@ -55,6 +58,8 @@ pub fn write_chain_run(
         kind: crate::scene::folded::KIND,
         scene,
         report: &report,
+        run_id: folder.run_id(),
+        files: [(SAMPLES, FileStamp::of(&csv_path)?)].into(),
     };
     let mut text = serde_json::to_string_pretty(&written)?;
     text.push('\n');

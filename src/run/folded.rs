@@ -17,7 +17,7 @@ use crate::theory::folded::FoldedFall;
 pub const FRACTIONS: [f64; 5] = [0.25, 0.5, 0.75, 0.9, 0.95];
 
 /// One row of the chain's `samples.csv`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct ChainSample {
     /// Simulated time (s).
     pub t_s: f64,

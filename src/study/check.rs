@@ -13,9 +13,11 @@ use crate::output::files::{RunFiles, View};
 use crate::output::table::Table;
 use crate::output::{CSV_COLUMNS, folder};
 use crate::run::RunReport;
+use crate::run::folded::{ChainReport, ChainSample};
 use crate::run::limits::label;
 use crate::run::stop::{Status, StopReason};
 use crate::scene::Scene;
+use crate::scene::folded;
 
 /// How one case ended.
 #[derive(Debug, Clone, PartialEq)]
@@ -122,9 +124,10 @@ fn run_into(scene: &Scene, dir: &Path) -> anyhow::Result<RunReport> {
     RunFiles::take(dir, scene, View::Off)?.run(scene, None, &AtomicBool::new(false))
 }
 
-/// What is wrong with the outputs in `dir`: a missing `samples.csv` or `report.json`, a
-/// leftover `.partial` file, a CSV row with the wrong number of cells or a cell that is
-/// not a finite number (empty cells are allowed), a `NaN` or infinity in the JSON.
+/// What is wrong with the outputs in `dir`, a coil's run or a folded chain's (as its
+/// `report.json` says): a missing `samples.csv` or `report.json`, a leftover `.partial`
+/// file, a CSV row with the wrong number of cells or a cell that is not a finite number
+/// (empty cells are allowed), a `NaN` or infinity in the JSON, files of different runs.
 pub fn verify_outputs(dir: &Path) -> Vec<String> {
     let mut problems = Vec::new();
     for name in [folder::SAMPLES, folder::REPORT] {
@@ -133,11 +136,22 @@ pub fn verify_outputs(dir: &Path) -> Vec<String> {
             problems.push(format!("{} left behind", partial.display()));
         }
     }
+    let report = std::fs::read_to_string(dir.join(folder::REPORT));
+    let chain = report.as_ref().is_ok_and(|text| {
+        serde_json::from_str::<serde_json::Value>(text)
+            .is_ok_and(|v| v.get("kind").and_then(|k| k.as_str()) == Some(folded::KIND))
+    });
+    let columns: Vec<String> = if chain {
+        chain_columns()
+    } else {
+        CSV_COLUMNS.iter().map(|c| (*c).to_owned()).collect()
+    };
     match std::fs::read_to_string(dir.join(folder::SAMPLES)) {
-        Ok(text) => problems.extend(csv_problems(&text)),
+        Ok(text) => problems.extend(csv_problems(&text, &columns)),
         Err(e) => problems.push(format!("{}: {e}", folder::SAMPLES)),
     }
-    match std::fs::read_to_string(dir.join(folder::REPORT)) {
+    match report {
+        Ok(text) if chain => problems.extend(chain_report_problem(&text)),
         Ok(text) => problems.extend(report_problem(&text)),
         Err(e) => problems.push(format!("{}: {e}", folder::REPORT)),
     }
@@ -160,27 +174,63 @@ fn report_problem(text: &str) -> Option<String> {
         })
 }
 
-/// Problems of a `samples.csv` text: header, cell count, non-finite cells.
-pub fn csv_problems(text: &str) -> Vec<String> {
+/// The columns of a folded chain's `samples.csv`: [`ChainSample`]'s fields as the `csv`
+/// crate writes them.
+fn chain_columns() -> Vec<String> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let header = w
+        .serialize(ChainSample::default())
+        .ok()
+        .and_then(|()| w.into_inner().ok())
+        .and_then(|bytes| String::from_utf8(bytes).ok())
+        .unwrap_or_default();
+    header
+        .lines()
+        .next()
+        .unwrap_or_default()
+        .split(',')
+        .map(str::to_owned)
+        .collect()
+}
+
+/// Why a folded chain's `report.json` does not read back: its `report` as a [`ChainReport`].
+fn chain_report_problem(text: &str) -> Option<String> {
+    let value: serde_json::Value = match serde_json::from_str(text) {
+        Ok(v) => v,
+        Err(e) => return Some(format!("report.json: {e}")),
+    };
+    let report = value.get("report").cloned().unwrap_or_default();
+    serde_json::from_value::<ChainReport>(report)
+        .err()
+        .map(|e| format!("report.json: report does not read back: {e}"))
+}
+
+/// Problems of a `samples.csv` text against its `columns`: header, cell count, non-finite
+/// cells; at most about ten.
+pub fn csv_problems(text: &str, columns: &[String]) -> Vec<String> {
     let mut problems = Vec::new();
     let mut lines = text.lines();
-    if lines.next() != Some(CSV_COLUMNS.join(",").as_str()) {
+    if lines.next() != Some(columns.join(",").as_str()) {
         problems.push("samples.csv: header differs from the documented columns".to_owned());
     }
     let mut rows = 0usize;
     for (i, line) in lines.enumerate() {
         rows += 1;
+        if problems.len() > 10 {
+            problems.push("samples.csv: more problems not listed".to_owned());
+            break;
+        }
         let cells: Vec<&str> = line.split(',').collect();
-        if cells.len() != CSV_COLUMNS.len() {
+        if cells.len() != columns.len() {
             problems.push(format!(
                 "samples.csv row {}: {} cells, expected {}",
                 i + 1,
                 cells.len(),
-                CSV_COLUMNS.len()
+                columns.len()
             ));
             continue;
         }
-        for (cell, column) in cells.iter().zip(CSV_COLUMNS.iter()) {
+        for (cell, column) in cells.iter().zip(columns.iter()) {
             if cell.is_empty() {
                 continue;
             }
@@ -190,10 +240,6 @@ pub fn csv_problems(text: &str) -> Vec<String> {
                     i + 1
                 ));
             }
-        }
-        if problems.len() > 10 {
-            problems.push("samples.csv: more problems not listed".to_owned());
-            break;
         }
     }
     if rows == 0 {
@@ -350,6 +396,34 @@ mod tests {
         v.join(",")
     }
 
+    /// A coil's columns.
+    fn coil() -> Vec<String> {
+        CSV_COLUMNS.iter().map(|c| (*c).to_owned()).collect()
+    }
+
+    #[test]
+    fn a_folded_chains_folder_is_checked_as_a_chains() {
+        let chain = crate::scene::folded::FoldedChain::from_toml_str(
+            "kind = \"folded-chain\"\n[chain]\nlinks = 10\n[stop]\nmax_time_s = 0.01\n",
+            "fc",
+        )
+        .unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let folder = folder::RunFolder::take(dir.path(), "id", "fc").unwrap();
+        let stop = AtomicBool::new(false);
+        crate::output::folded::write_chain_run(&chain, &folder, &stop).unwrap();
+        assert_eq!(verify_outputs(dir.path()), Vec::<String>::new());
+        // A samples file that is not the one the report was written with.
+        let samples = dir.path().join(folder::SAMPLES);
+        let text = std::fs::read_to_string(&samples).unwrap();
+        std::fs::write(&samples, format!("{text}{}", text.lines().last().unwrap())).unwrap();
+        let p = verify_outputs(dir.path());
+        assert!(
+            p.len() == 1 && p[0].contains("is not the one report.json was written with"),
+            "{p:?}"
+        );
+    }
+
     #[test]
     fn sound_csv_has_no_problems() {
         let text = format!(
@@ -358,21 +432,21 @@ mod tests {
             row(&[]),
             row(&["", ""])
         );
-        assert_eq!(csv_problems(&text), Vec::<String>::new());
+        assert_eq!(csv_problems(&text, &coil()), Vec::<String>::new());
     }
 
     #[test]
     fn nan_short_row_and_empty_table_are_problems() {
         let header = CSV_COLUMNS.join(",");
-        let p = csv_problems(&format!("{header}\n{}\n", row(&["NaN"])));
+        let p = csv_problems(&format!("{header}\n{}\n", row(&["NaN"])), &coil());
         assert!(p.len() == 1 && p[0].contains("t_s = \"NaN\""), "{p:?}");
-        let p = csv_problems(&format!("{header}\n{}\n", row(&["0", "inf"])));
+        let p = csv_problems(&format!("{header}\n{}\n", row(&["0", "inf"])), &coil());
         assert!(p.len() == 1 && p[0].contains("laid_fraction"), "{p:?}");
-        let p = csv_problems(&format!("{header}\n1,2,3\n"));
+        let p = csv_problems(&format!("{header}\n1,2,3\n"), &coil());
         assert!(p.len() == 1 && p[0].contains("3 cells"), "{p:?}");
-        let p = csv_problems(&format!("{header}\n"));
+        let p = csv_problems(&format!("{header}\n"), &coil());
         assert_eq!(p, vec!["samples.csv has no rows".to_owned()]);
-        let p = csv_problems("a,b\n");
+        let p = csv_problems("a,b\n", &coil());
         assert!(p[0].contains("header"), "{p:?}");
     }
 

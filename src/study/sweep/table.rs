@@ -106,7 +106,7 @@ impl SweepTable {
 
     /// The varied keys: the columns between `index` and `links`.
     pub fn varied_keys(&self) -> Vec<String> {
-        let end = self.column("links").unwrap_or(self.header.len());
+        let end = self.column(Col::Links.name()).unwrap_or(self.header.len());
         self.header
             .iter()
             .take(end)
@@ -200,7 +200,9 @@ fn shard_of(path: &Path) -> Option<Shard> {
 /// [`Missing`]). Every file must have the same header; an index found twice is an error (a
 /// shard run twice, or the same file given twice), as is an index that is not its file's
 /// shard's or shard files of different `N`. A file's last row cut short (its writer killed
-/// mid-row) is left out and reported.
+/// mid-row) is left out and reported. The files do not state the grid's size: the rows show
+/// it as the product of the values each varied key takes in them, so a combination missing at
+/// the grid's end is found unless every row of some value is missing too.
 pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<(SweepTable, Missing)> {
     anyhow::ensure!(!inputs.is_empty(), "nothing to merge");
     let mut merged: Option<SweepTable> = None;
@@ -266,15 +268,36 @@ pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<(SweepTable, Missing)> {
         let absent = (1..=n).filter(|k| !shards.contains_key(k)).collect();
         missing.shards = Some((n, absent));
     }
-    if let Some(&last) = seen.keys().next_back() {
-        missing.combinations = (0..last).filter(|i| !seen.contains_key(i)).collect();
-    }
     let mut m = merged.expect("at least one input");
+    // The files do not state the grid's size; the rows show it, but for a value of a varied
+    // key whose every row is missing.
+    let end = seen.keys().next_back().map_or(0, |&last| last + 1);
+    let grid = grid_size(&m).unwrap_or(0).max(end);
+    missing.combinations = (0..grid).filter(|i| !seen.contains_key(i)).collect();
     let ic = m.column(INDEX_COLUMN).expect("checked above");
     m.rows
         .sort_by_key(|r| r[ic].parse::<usize>().unwrap_or(usize::MAX));
     Ok((m, missing))
 }
+/// The size of the grid `t`'s rows come from: the product over the varied keys of the values
+/// its rows hold. `None` for a table without result columns, whose keys are not known.
+fn grid_size(t: &SweepTable) -> Option<usize> {
+    t.column(Col::Links.name())?;
+    Some(
+        t.varied_keys()
+            .iter()
+            .map(|k| {
+                let c = t.column(k).expect("a varied key is a column");
+                t.rows
+                    .iter()
+                    .map(|r| r[c].as_str())
+                    .collect::<std::collections::BTreeSet<_>>()
+                    .len()
+            })
+            .product(),
+    )
+}
+
 /// Writes a merged table to `dir/sweep.csv` (atomically) and returns the path.
 pub fn write_merged(table: &SweepTable, dir: &Path) -> anyhow::Result<PathBuf> {
     std::fs::create_dir_all(dir)
@@ -351,6 +374,22 @@ mod tests {
             text.contains("is cut mid-row: its 1 complete rows are kept"),
             "{text}"
         );
+        // A task killed between rows leaves a file that ends with a whole row: the last
+        // combinations are missing, and the grid's size, shown by the other rows, says so.
+        let head = "index,a,b,links,status\n";
+        let one = write(
+            d,
+            "sweep.1-of-2.csv",
+            &format!("{head}0,1,x,9,ok\n2,1,z,9,ok\n"),
+        );
+        let two = write(
+            d,
+            "sweep.2-of-2.csv",
+            &format!("{head}1,1,y,9,ok\n3,2,x,9,ok\n"),
+        );
+        let (_, missing) = merge(&[one, two]).unwrap();
+        assert_eq!(missing.combinations, [4, 5]);
+        let one = write(d, "sweep.1-of-3.csv", "index,k,status\n0,a,ok\n3,b,ok\n");
         // An index that is not its file's shard's.
         let wrong = write(d, "sweep.2-of-3.csv", "index,k,status\n2,e,ok\n");
         let e = merge(&[one, wrong]).unwrap_err().to_string();
