@@ -225,10 +225,9 @@ impl Model {
     /// Closes the gap a new pin in the bang leaves: `pin_to_world` pins a piece above the
     /// floor's contact plane, while a piece lying on the floor has its node on it or below
     /// it. A rigid joint would close that gap within one substep, at the gap over the
-    /// substep's length: at 48 substeps of a 0.0375 rad step, a 20 um gap flung the yoga
-    /// mat's laid pieces with 3 % of the bang's energy, and the kick grew as the square of
-    /// the substeps. The chain is moved instead, by position alone; the change of its
-    /// potential energy (a few microjoules) is booked as the bang's residual.
+    /// substep's length, a kick that grows as the square of the substeps
+    /// (docs/final-bang.md gives the measurement). The chain is moved instead, by position
+    /// alone; the change of its potential energy is booked as the bang's residual.
     pub(super) fn close_pin_gap(&mut self) {
         let before = self.total_energy();
         self.close_gaps();

@@ -4,9 +4,7 @@
 //! While the coil rolls, the window is the time the coil took to lay its last link (or the
 //! sample interval, if longer). The chain's load sharing swings once per link laid: the
 //! floor's share under the coil and the hanging link's pull trade places as the link goes
-//! down (yoga mat at 32 links per turn, over one sample interval: the floor's friction on
-//! the coil swings by 4 % of `M g` at f = 0.1), while their sum, the momentum balance, does
-//! not. A window of one link period takes that swing out and nothing else; the references
+//! down, while their sum, the momentum balance, does not. A window of one link period takes that swing out and nothing else; the references
 //! are evaluated at the window's mean laid fraction, so the window's half-period lag does
 //! not bias a comparison. Once the coil is released the window is the sample interval.
 

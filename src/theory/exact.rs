@@ -399,8 +399,8 @@ impl ExactGeometry {
     /// pulls along the floor (`N_int = 0`, `N = N_tot`). Of `F_tot` the split given is the
     /// one with the least pull in the laid tape: the floor's friction carries it while it
     /// can, `|F| <= mu N`, and the laid tape the rest. The simulation's split converges to
-    /// it as the links shrink (yoga mat: within 4.4, 1.7, 0.7 % of `M g` at 32, 64, 128
-    /// links per turn). `None` when sliding or at the table's ends.
+    /// it as the links shrink (docs/variants.md gives the measured gaps). `None`
+    /// when sliding or at the table's ends.
     pub fn forces(&self, psi: f64, friction: f64) -> Option<GeoForces> {
         let (lo, hi) = (self.traj.q_end(), self.spiral.psi_out);
         if self.sliding || psi - 1e-4 <= lo || psi + 1e-4 >= hi {
