@@ -19,16 +19,54 @@ pub(crate) struct Trajectory {
 
 impl Trajectory {
     pub(crate) fn new(q0: f64, q_end: f64, panels: usize, rate: impl Fn(f64) -> f64) -> Self {
+        let (du, dtdu) = Self::integrand(q0, q_end, panels, &rate);
+        let parts = (0..panels).map(|k| Self::panel(k, du, &dtdu));
+        Self::from_panels(q0, du, parts)
+    }
+
+    /// [`Self::new`] with the panels evaluated in parallel (they are independent), the times
+    /// summed in order: the same bits, in a fraction of the time on more than one core.
+    pub(crate) fn new_parallel(
+        q0: f64,
+        q_end: f64,
+        panels: usize,
+        rate: impl Fn(f64) -> f64 + Sync,
+    ) -> Self {
+        use rayon::prelude::*;
+        let (du, dtdu) = Self::integrand(q0, q_end, panels, &rate);
+        let parts: Vec<(f64, f64)> = (0..panels)
+            .into_par_iter()
+            .map(|k| Self::panel(k, du, &dtdu))
+            .collect();
+        Self::from_panels(q0, du, parts)
+    }
+
+    /// The panels' width in `u = sqrt(q0 - q)` and `dt/du`.
+    fn integrand<'r>(
+        q0: f64,
+        q_end: f64,
+        panels: usize,
+        rate: &'r (impl Fn(f64) -> f64 + ?Sized),
+    ) -> (f64, impl Fn(f64) -> f64 + 'r) {
         let u_end = (q0 - q_end).max(0.0).sqrt();
-        let du = u_end / panels as f64;
-        let dtdu = |u: f64| 2.0 * u / rate(q0 - u * u);
-        let mut nodes = Vec::with_capacity(panels + 1);
+        (u_end / panels as f64, move |u: f64| {
+            2.0 * u / rate(q0 - u * u)
+        })
+    }
+
+    /// Panel `k`'s time and the slope `dt/du` at its end.
+    fn panel(k: usize, du: f64, dtdu: &impl Fn(f64) -> f64) -> (f64, f64) {
+        let lo = du * k as f64;
+        (gauss5(lo, lo + du, dtdu), dtdu(lo + du))
+    }
+
+    /// The table from the panels' times and end slopes, the times summed in order.
+    fn from_panels(q0: f64, du: f64, parts: impl IntoIterator<Item = (f64, f64)>) -> Self {
+        let mut nodes = vec![[0.0, 0.0, 0.0]];
         let mut t = 0.0;
-        nodes.push([0.0, 0.0, 0.0]);
-        for k in 0..panels {
-            let lo = du * k as f64;
-            t += gauss5(lo, lo + du, dtdu);
-            nodes.push([lo + du, t, dtdu(lo + du)]);
+        for (k, (dt, slope)) in parts.into_iter().enumerate() {
+            t += dt;
+            nodes.push([du * k as f64 + du, t, slope]);
         }
         Self { q0, nodes }
     }
