@@ -4,12 +4,14 @@
 //! removed when a run starts, so a killed run never leaves a file that looks finished. This
 //! module does no physics.
 
+pub mod background;
 pub mod compare;
 pub mod fields;
 pub mod files;
 pub mod folded;
 pub mod folder;
 pub mod inspect;
+pub mod sci;
 pub mod summary;
 pub mod table;
 pub mod view;
@@ -36,21 +38,6 @@ pub static CSV_COLUMNS: LazyLock<Vec<&'static str>> = LazyLock::new(|| {
         .map(|(name, _)| name)
         .collect()
 });
-
-/// A sample's cells in `samples.csv`: every number as `{:.9e}`, an empty cell where it is
-/// not finite (a reference past its end, a quantity its phase does not have).
-fn sample_cells(sample: &Sample) -> anyhow::Result<Vec<String>> {
-    Ok(fields(sample)?
-        .into_iter()
-        .map(|(_, v)| {
-            if v.is_finite() {
-                format!("{v:.9e}")
-            } else {
-                String::new()
-            }
-        })
-        .collect())
-}
 
 /// Writes `path` atomically: into `path.partial`, flushed to disk, then renamed.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
@@ -89,6 +76,8 @@ pub(crate) fn partial_path(path: &Path) -> PathBuf {
 pub struct CsvObserver {
     path: PathBuf,
     out: Option<csv::Writer<File>>,
+    /// One cell's text, reused.
+    cell: String,
 }
 
 impl CsvObserver {
@@ -97,6 +86,7 @@ impl CsvObserver {
         Self {
             path: dir.join(folder::SAMPLES),
             out: None,
+            cell: String::new(),
         }
     }
 }
@@ -118,7 +108,17 @@ impl Observer for CsvObserver {
         let Some(out) = self.out.as_mut() else {
             return Ok(());
         };
-        out.write_record(sample_cells(sample)?)
+        // Every number as `{:.9e}`; an empty cell where it is not finite (a reference past
+        // its end, a quantity its phase does not have).
+        let written = fields(sample)?.into_iter().try_for_each(|(_, v)| {
+            self.cell.clear();
+            if v.is_finite() {
+                sci::push_sci9(&mut self.cell, v);
+            }
+            out.write_field(&self.cell)
+        });
+        written
+            .and_then(|()| out.write_record(None::<&[u8]>))
             .with_context(|| format!("cannot write {}", partial_path(&self.path).display()))?;
         Ok(())
     }

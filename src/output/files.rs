@@ -1,11 +1,13 @@
 //! A run's files, wired in one place. `uncoil run`, `uncoil check` and `uncoil.run(out=...)`
 //! all write a coil's run through [`RunFiles`]: the folder taken for the run
 //! ([`RunFolder`]), then `samples.csv`, `report.json` and, when asked, the Foxglove view,
-//! in that order (the report stamps the finished samples; the view's `run.mcap` closes last).
+//! in that order (the report stamps the finished samples; the view's `run.mcap` closes last),
+//! on a thread beside the run's.
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
+use crate::output::background::Background;
 use crate::output::folder::{FolderError, RunFolder, run_id};
 use crate::output::view::ViewObserver;
 use crate::output::{CsvObserver, ReportObserver};
@@ -65,20 +67,33 @@ impl RunFiles {
     }
 
     /// Runs `scene` into the files, with `first` observing before them (the Python
-    /// package's columns); stops early once `stop` is set.
+    /// package's columns); stops early once `stop` is set. The files are written on a
+    /// thread of their own ([`Background`]), but for a view served live, which holds the
+    /// run to its pace and stays on the run's thread.
     pub fn run<'a>(
         &'a mut self,
         scene: &Scene,
         first: Option<&'a mut dyn Observer>,
         stop: &AtomicBool,
     ) -> anyhow::Result<RunReport> {
-        let mut observers: Vec<&mut dyn Observer> = Vec::with_capacity(4);
-        observers.extend(first);
-        observers.push(&mut self.csv);
-        observers.push(&mut self.report);
-        if let Some(view) = self.view.as_mut() {
-            observers.push(view);
+        if self.view.as_ref().is_some_and(ViewObserver::is_live) {
+            let mut observers: Vec<&mut dyn Observer> = Vec::with_capacity(4);
+            observers.extend(first);
+            observers.push(&mut self.csv);
+            observers.push(&mut self.report);
+            observers.extend(self.view.as_mut().map(|v| v as &mut dyn Observer));
+            return run_until(scene, &mut observers, stop);
         }
-        run_until(scene, &mut observers, stop)
+        std::thread::scope(|scope| {
+            let mut files: Vec<&mut (dyn Observer + Send)> = vec![&mut self.csv, &mut self.report];
+            files.extend(self.view.as_mut().map(|v| v as &mut (dyn Observer + Send)));
+            let mut background = Background::spawn(scope, files);
+            let mut observers: Vec<&mut dyn Observer> = Vec::with_capacity(2);
+            if let Some(first) = first {
+                observers.push(first);
+            }
+            observers.push(&mut background);
+            run_until(scene, &mut observers, stop)
+        })
     }
 }

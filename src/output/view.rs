@@ -99,6 +99,18 @@ impl ViewObserver {
         }
     }
 
+    /// Whether a live server was started on it.
+    pub fn is_live(&self) -> bool {
+        #[cfg(feature = "live")]
+        {
+            self.live.is_some()
+        }
+        #[cfg(not(feature = "live"))]
+        {
+            false
+        }
+    }
+
     /// Where the finished file goes, if one is written.
     pub fn path(&self) -> Option<&Path> {
         self.path.as_deref()
