@@ -10,8 +10,10 @@ use crate::run::frame::{Event, Frame};
 use crate::run::{Observer, RunReport, Sample};
 use crate::scene::Scene;
 
-/// Calls waiting for the thread at most: a bound on the memory a slow disk can take.
-const QUEUE: usize = 1024;
+/// Calls handed over at once: one wake-up of the thread per batch, not per sample.
+const BATCH: usize = 64;
+/// Batches waiting for the thread at most: a bound on the memory a slow disk can take.
+const QUEUE: usize = 16;
 
 /// One call of [`Observer`].
 enum Call {
@@ -26,7 +28,8 @@ enum Call {
 /// The first error ends the thread; it is returned by the next call, at the latest by
 /// [`Observer::observe_final`], which waits for the thread to finish its files.
 pub struct Background<'scope> {
-    calls: Option<SyncSender<Call>>,
+    calls: Option<SyncSender<Vec<Call>>>,
+    batch: Vec<Call>,
     thread: Option<ScopedJoinHandle<'scope, anyhow::Result<()>>>,
     frames: bool,
 }
@@ -42,14 +45,26 @@ impl<'scope> Background<'scope> {
         let thread = scope.spawn(move || serve(&mut observers, &inbox));
         Self {
             calls: Some(calls),
+            batch: Vec::with_capacity(BATCH),
             thread: Some(thread),
             frames,
         }
     }
 
-    /// Hands `call` to the thread; if it has ended, its error.
+    /// Queues `call`, and hands the batch to the thread once it is full; if the thread has
+    /// ended, its error.
     fn send(&mut self, call: Call) -> anyhow::Result<()> {
-        let sent = self.calls.as_ref().is_some_and(|c| c.send(call).is_ok());
+        self.batch.push(call);
+        if self.batch.len() < BATCH {
+            return Ok(());
+        }
+        self.flush()
+    }
+
+    /// Hands the batch to the thread; if it has ended, its error.
+    fn flush(&mut self) -> anyhow::Result<()> {
+        let batch = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH));
+        let sent = self.calls.as_ref().is_some_and(|c| c.send(batch).is_ok());
         if sent { Ok(()) } else { self.join() }
     }
 
@@ -68,9 +83,9 @@ impl<'scope> Background<'scope> {
 /// The thread: every call to every observer, in order, until the final one or an error.
 fn serve(
     observers: &mut [&mut (dyn Observer + Send)],
-    inbox: &Receiver<Call>,
+    inbox: &Receiver<Vec<Call>>,
 ) -> anyhow::Result<()> {
-    for call in inbox {
+    for call in inbox.iter().flatten() {
         for o in observers.iter_mut() {
             match &call {
                 Call::Init(scene) => o.observe_init(scene)?,
@@ -104,7 +119,8 @@ impl Observer for Background<'_> {
         self.send(Call::Event(Box::new(event.clone())))
     }
     fn observe_final(&mut self, report: &RunReport) -> anyhow::Result<()> {
-        self.send(Call::Final(Box::new(report.clone())))?;
+        self.batch.push(Call::Final(Box::new(report.clone())));
+        self.flush()?;
         self.join()
     }
 }
