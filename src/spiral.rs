@@ -265,6 +265,29 @@ impl SpiralMoments {
         base + self.spiral.arc(lo, psi)
     }
 
+    /// [`Self::length_at`], bit for bit, for many `psi` in a row: `start` keeps the panel
+    /// last used and its start's arc from the spiral's centre, which need not be made again.
+    pub fn length_at_near(&self, psi: f64, start: &mut Option<(usize, f64)>) -> f64 {
+        let psi = psi.clamp(self.spiral.psi_in, self.spiral.psi_out);
+        let k =
+            (((psi - self.spiral.psi_in) / self.step).floor() as usize).min(self.table.len() - 1);
+        let lo = self.spiral.psi_in + self.step * k as f64;
+        let base = self.table[k][0];
+        if psi <= lo {
+            return base;
+        }
+        let from_centre = match *start {
+            Some((j, arc)) if j == k => arc,
+            _ => {
+                let arc = self.spiral.arc_from_centre(lo);
+                *start = Some((k, arc));
+                arc
+            }
+        };
+        // `Spiral::arc(lo, psi)`, with the first term kept.
+        base + (self.spiral.arc_from_centre(psi) - from_centre)
+    }
+
     /// The `psi` at which the midline's length from `psi_in` is `length` (m), clamped to the
     /// spiral: the inverse of [`Self::length_at`]. The panel is found among the table's nodes,
     /// then Newton's method on the panel's closed-form arc, whose slope `a sqrt(1 + psi^2)` is
@@ -339,6 +362,16 @@ mod tests {
             assert_eq!(
                 m.length_at(psi).to_bits(),
                 m.at(psi)[0].to_bits(),
+                "psi = {psi}"
+            );
+        }
+        // And with the panel's start kept, in any order of psi.
+        let mut start = None;
+        for k in 0..=2000_u32 {
+            let psi = s.psi_in + (s.psi_out - s.psi_in) * f64::from((k * 7919) % 2001) / 2000.0;
+            assert_eq!(
+                m.length_at_near(psi, &mut start).to_bits(),
+                m.length_at(psi).to_bits(),
                 "psi = {psi}"
             );
         }

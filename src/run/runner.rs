@@ -253,7 +253,8 @@ impl<'s> Runner<'s> {
         let rolling = obs.phase == Phase::Rolling;
         let released = !rolling && self.prev.is_some_and(|p| p.phase == Phase::Rolling);
         self.prev_logged = obs.t_s >= self.next_sample || last_step || released;
-        if self.prev_logged {
+        // A run nobody watches (a sweep's) makes no samples: the report does not need them.
+        if self.prev_logged && !observers.is_empty() {
             let mut sample = make_sample(obs, self.xdot, self.e0, &self.refs);
             if let Some(mean) = self.window.sample(rolling) {
                 set_forces(&mut sample, &mean, rolling, &self.refs);

@@ -239,8 +239,12 @@ impl ExactGeometry {
     /// from it than 1e-11 of `psi` falls on the side the root says without evaluating the
     /// arc, so some fifteen evaluations replace sixty.
     pub fn psi_at_fraction(&self, f: f64) -> f64 {
-        let guess = self.moments.psi_at_length((1.0 - f) * self.spiral.length());
+        let total = self.spiral.length();
+        let guess = self.moments.psi_at_length((1.0 - f) * total);
         let margin = 1e-11 * guess.abs().max(1.0);
+        // `laid_fraction(mid)`, bit for bit, its panel's start kept from one midpoint to the
+        // next.
+        let mut start = None;
         let (mut lo, mut hi) = (self.spiral.psi_in, self.spiral.psi_out);
         for _ in 0..100 {
             let mid = 0.5 * (lo + hi);
@@ -252,7 +256,7 @@ impl ExactGeometry {
             } else if mid > guess + margin {
                 false
             } else {
-                self.laid_fraction(mid) > f
+                1.0 - self.moments.length_at_near(mid, &mut start) / total > f
             };
             if short_of_root {
                 lo = mid;
