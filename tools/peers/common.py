@@ -210,4 +210,6 @@ def arguments(description: str, defaults: dict) -> argparse.ArgumentParser:
     p.add_argument("--links-per-turn", type=int, default=None,
                    help="links per turn (default: the scene's)")
     p.add_argument("--stop-fraction", type=float, default=0.9)
+    p.add_argument("--trace", type=int, default=0,
+                   help="print time, laid fraction and energy every this many steps")
     return p

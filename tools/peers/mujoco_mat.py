@@ -31,7 +31,7 @@ def model_xml(mat: Mat, nodes: np.ndarray, args) -> str:
     lengths = np.hypot(chords[:, 0], chords[:, 1])
     masses = mat.mass_kg * lengths / lengths.sum()
     n = len(chords)
-    solref = f'solref="{args.solref_s} 1"'
+    solref = f'solref="{args.solref_s} 1" solimp="{args.solimp}"'
     out = [
         '<mujoco model="yoga-mat">',
         f'<option timestep="{args.dt_s}" gravity="0 0 {-mat.g_m_s2}" integrator="{args.integrator}"'
@@ -70,10 +70,13 @@ def model_xml(mat: Mat, nodes: np.ndarray, args) -> str:
 
 
 def main() -> None:
-    p = arguments(__doc__.splitlines()[0], {"dt_s": 5e-4})
+    p = arguments(__doc__.splitlines()[0], {"dt_s": 1e-4})
     p.add_argument("--iterations", type=int, default=100, help="constraint solver iterations")
-    p.add_argument("--solref-s", type=float, default=0.002,
-                   help="contact time constant (s; MuJoCo's default is 0.02)")
+    p.add_argument("--solref-s", type=float, default=2e-4,
+                   help="time constant of contacts and locks (s; MuJoCo's default is 0.02)")
+    p.add_argument("--solimp", default="0.9999 0.9999 0.001",
+                   help="constraint impedance, dmin dmax width (MuJoCo's default 0.9 0.95 0.001 "
+                        "lets a twentieth of every load through the locks, and the coil sags)")
     p.add_argument("--integrator", default="implicitfast")
     p.add_argument("--release-m", type=float, default=None,
                    help="a hinge is freed once its node is this close to the laid midline "
@@ -124,10 +127,13 @@ def main() -> None:
         while next_lock < model.neq and data.xpos[next_lock + 2, 2] <= 0.5 * b + release_m:
             data.eq_active[next_lock] = 0
             next_lock += 1
-        if rec.observe(t, args.dt_s, meter(angle_of), energy):
+        f = meter(angle_of)
+        if args.trace and steps % args.trace == 0:
+            print(f"t {t:.4f} f {f:.5f} E {energy():.5f} hinges freed {next_lock}", file=sys.stderr)
+        if rec.observe(t, args.dt_s, f, energy):
             break
     settings = {"dt_s": args.dt_s, "iterations": args.iterations, "solref_s": args.solref_s,
-                "integrator": args.integrator, "cone": args.cone, "release_m": release_m,
+                "solimp": args.solimp, "integrator": args.integrator, "cone": args.cone, "release_m": release_m,
                 "links_per_turn": mat.links_per_turn}
     rec.report(started, stepping_s, steps, t, settings, n)
 

@@ -53,6 +53,12 @@ struct Args {
     /// default is 4, under which the 351 locked joints bend like a spring).
     #[arg(long, default_value_t = 32)]
     iterations: usize,
+    /// Gauss-Seidel sweeps per solver iteration (rapier's `num_internal_pgs_iterations`).
+    #[arg(long, default_value_t = 1)]
+    pgs: usize,
+    /// Warm-start the joints with the last step's impulses (rapier's `warmstart_joints`).
+    #[arg(long)]
+    warmstart_joints: bool,
     /// Links per turn of the spiral (default: the scene's).
     #[arg(long)]
     links_per_turn: Option<u32>,
@@ -83,6 +89,11 @@ struct Args {
     /// is smooth.
     #[arg(long)]
     capsules: bool,
+    /// Thickness of the links' colliders (m; default: the tape's, b). The floor is put at
+    /// half of it below the laid midline (b/2): a thinner collider rolls the coil closer
+    /// to its midline, as the exact model does.
+    #[arg(long)]
+    collider_thickness_m: Option<f64>,
     /// Give each link the cuboid's own moment of inertia, m (l^2 + b^2) / 12, rather than a
     /// rod's, m l^2 / 12 (the exact model's line mass).
     #[arg(long)]
@@ -165,13 +176,17 @@ fn main() -> anyhow::Result<()> {
     let ip = &mut world.integration_parameters;
     ip.dt = args.dt_s;
     ip.num_solver_iterations = args.iterations;
+    ip.num_internal_pgs_iterations = args.pgs;
+    ip.warmstart_joints = args.warmstart_joints;
     ip.length_unit = args.length_unit_m.unwrap_or(b);
     let soft = SpringCoefficients::new(args.contact_hz, ip.contact_softness.damping_ratio);
     ip.contact_softness = soft;
     ip.static_contact_softness = soft;
+    let half_t_m = 0.5 * args.collider_thickness_m.unwrap_or(b);
     let ground = world.insert_body(RigidBodyBuilder::fixed());
     world.insert_collider(
         ColliderBuilder::new(SharedShape::halfspace(Vector::Y))
+            .translation(Vector::new(0.0, 0.5 * (b - half_t_m * 2.0)))
             .friction(scene.floor.friction)
             .user_data(FLOOR_TAG)
             .collision_groups(InteractionGroups::new(
@@ -230,9 +245,9 @@ fn main() -> anyhow::Result<()> {
         );
         world.insert_collider(
             if args.capsules {
-                ColliderBuilder::capsule_x(0.5 * len, 0.5 * b)
+                ColliderBuilder::capsule_x(0.5 * len, half_t_m)
             } else {
-                ColliderBuilder::cuboid(0.5 * len, 0.5 * b)
+                ColliderBuilder::cuboid(0.5 * len, half_t_m)
             }
             .density(0.0)
             .friction(scene.floor.friction)
@@ -424,7 +439,7 @@ fn main() -> anyhow::Result<()> {
         "peer": "plain-rapier",
         "settings": {"dt_s": args.dt_s, "iterations": args.iterations, "links_per_turn": lpt,
                      "contact_hz": args.contact_hz, "joint_hz": args.joint_hz,
-                     "hold": format!("{:?}", args.hold), "capsules": args.capsules,
+                     "hold": format!("{:?}", args.hold), "pgs": args.pgs, "warmstart_joints": args.warmstart_joints, "capsules": args.capsules, "collider_thickness_m": 2.0 * half_t_m,
                      "cuboid_inertia": args.cuboid_inertia},
         "links": links.len(), "steps": steps, "sim_s": t_s,
         "wall_s": wall_s, "stepping_s": stepping_s, "outcome": outcome,

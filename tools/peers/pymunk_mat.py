@@ -31,6 +31,9 @@ def main() -> None:
     p.add_argument("--release-m", type=float, default=None,
                    help="a lock is removed once its node is this close to the laid midline "
                         "height (m; default b / 100)")
+    p.add_argument("--error-bias", type=float, default=None,
+                   help="joints' error left unfixed after a second (pymunk's 0.9^60 = 0.0018 "
+                        "lets the locked coil sag)")
     args = p.parse_args()
     mat = Mat(args.scene, args.links_per_turn)
     psis, nodes, rot0, contact, omega = mat.nodes()
@@ -70,6 +73,8 @@ def main() -> None:
             pivot.collide_bodies = False
             rest = float(angles[k] - angles[k - 1])
             lock = pymunk.RotaryLimitJoint(prev, body, rest, rest)
+            if args.error_bias is not None:
+                pivot.error_bias = lock.error_bias = args.error_bias
             space.add(pivot, lock)
             locks.append(lock)
         bodies.append(body)
@@ -103,10 +108,13 @@ def main() -> None:
                 break
             space.remove(locks[next_lock])
             next_lock += 1
-        if rec.observe(t, args.dt_s, meter(angle_of), energy):
+        f = meter(angle_of)
+        if args.trace and steps % args.trace == 0:
+            print(f"t {t:.4f} f {f:.5f} E {energy():.5f} locks freed {next_lock}", file=sys.stderr)
+        if rec.observe(t, args.dt_s, f, energy):
             break
     settings = {"dt_s": args.dt_s, "iterations": args.iterations,
-                "slop_m": space.collision_slop, "release_m": release_m,
+                "slop_m": space.collision_slop, "release_m": release_m, "error_bias": args.error_bias,
                 "links_per_turn": mat.links_per_turn}
     rec.report(started, stepping_s, steps, t, settings, len(bodies))
 
