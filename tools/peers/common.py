@@ -151,8 +151,10 @@ class Recorder:
     """Milestone crossings (time interpolated in the step, energy at the step that crossed),
     stall and blow-up detection, and the printed and JSON report."""
 
-    def __init__(self, name: str, mat: Mat, e0_j: float, stop_fraction: float):
+    def __init__(self, name: str, mat: Mat, e0_j: float, stop_fraction: float,
+                 max_wall_s: float = math.inf):
         self.name, self.mat, self.e0_j, self.stop_fraction = name, mat, e0_j, stop_fraction
+        self.max_wall_s, self.started = max_wall_s, time.perf_counter()
         self.hits = [None] * len(MILESTONES)
         self.f_prev, self.f_best, self.t_best = 0.0, 0.0, 0.0
         self.t_limit_s = 3 * max(mat.exact_s)
@@ -171,6 +173,8 @@ class Recorder:
             self.outcome = f"exploded at t = {t_s:.4f} s"
         elif f >= self.stop_fraction:
             self.outcome = "completed"
+        elif time.perf_counter() - self.started > self.max_wall_s:
+            self.outcome = f"out of wall time at laid fraction {f:.4f} (t = {t_s:.4f} s)"
         elif t_s - self.t_best > 1.0 or t_s > self.t_limit_s:
             self.outcome = f"stalled at laid fraction {self.f_best:.4f} (t = {self.t_best:.4f} s)"
         return self.outcome is not None
@@ -210,6 +214,8 @@ def arguments(description: str, defaults: dict) -> argparse.ArgumentParser:
     p.add_argument("--links-per-turn", type=int, default=None,
                    help="links per turn (default: the scene's)")
     p.add_argument("--stop-fraction", type=float, default=0.9)
+    p.add_argument("--max-wall-s", type=float, default=math.inf,
+                   help="give up after this much wall time (s), reporting how far it got")
     p.add_argument("--trace", type=int, default=0,
                    help="print time, laid fraction and energy every this many steps")
     return p

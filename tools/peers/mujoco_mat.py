@@ -27,6 +27,7 @@ def model_xml(mat: Mat, nodes: np.ndarray, args) -> str:
     """Every body frame starts unrotated at its link's near node; the capsule runs to the far
     node. MuJoCo's plane is x-z, gravity along -z; a hinge about +y turns x towards -z."""
     b = mat.thickness_m
+    radius_m = 0.5 * (args.collider_thickness_m or b)
     chords = np.diff(nodes, axis=0)
     lengths = np.hypot(chords[:, 0], chords[:, 1])
     masses = mat.mass_kg * lengths / lengths.sum()
@@ -40,7 +41,9 @@ def model_xml(mat: Mat, nodes: np.ndarray, args) -> str:
         # conaffinity 1).
         f'<default><geom friction="{mat.friction} 0.005 0.0001" {solref}'
         ' contype="2" conaffinity="1"/><equality ' + solref + "/></default>",
-        '<worldbody><geom name="floor" type="plane" size="5 1 0.1" contype="1" conaffinity="2"/>',
+                # The plane sits a capsule radius below the laid midline (b/2).
+        f'<worldbody><geom name="floor" type="plane" size="5 1 0.1" pos="0 0 {0.5 * b - radius_m}"'
+        ' contype="1" conaffinity="2"/>',
     ]
     close = []
     for k in range(n):
@@ -58,7 +61,7 @@ def model_xml(mat: Mat, nodes: np.ndarray, args) -> str:
             f' diaginertia="{inertia:.17g} {inertia:.17g} {inertia:.17g}"/>'
         )
         out.append(
-            f'<geom type="capsule" size="{b / 2}" mass="0"'
+            f'<geom type="capsule" size="{radius_m}" mass="0"'
             f' fromto="0 0 0 {dx:.17g} 0 {dz:.17g}"/>'
         )
         close.append("</body>")
@@ -77,6 +80,9 @@ def main() -> None:
     p.add_argument("--solimp", default="0.9999 0.9999 0.001",
                    help="constraint impedance, dmin dmax width (MuJoCo's default 0.9 0.95 0.001 "
                         "lets a twentieth of every load through the locks, and the coil sags)")
+    p.add_argument("--collider-thickness-m", type=float, default=None,
+                   help="capsule diameter (m; default b); the plane is put half of it below "
+                        "the laid midline, so a thin capsule rolls the coil on its midline")
     p.add_argument("--integrator", default="implicitfast")
     p.add_argument("--release-m", type=float, default=None,
                    help="a hinge is freed once its node is this close to the laid midline "
@@ -113,7 +119,7 @@ def main() -> None:
     next_lock = 0
     e0 = energy()
     meter = LaidMeter(mat, frame_angles)
-    rec = Recorder("mujoco", mat, e0, args.stop_fraction)
+    rec = Recorder("mujoco", mat, e0, args.stop_fraction, args.max_wall_s)
     t, steps, stepping_s = 0.0, 0, 0.0
     while True:
         tick = time.perf_counter()
@@ -133,7 +139,7 @@ def main() -> None:
         if rec.observe(t, args.dt_s, f, energy):
             break
     settings = {"dt_s": args.dt_s, "iterations": args.iterations, "solref_s": args.solref_s,
-                "solimp": args.solimp, "integrator": args.integrator, "cone": args.cone, "release_m": release_m,
+                "solimp": args.solimp, "collider_thickness_m": 2 * float(model.geom_size[1, 0]), "integrator": args.integrator, "cone": args.cone, "release_m": release_m,
                 "links_per_turn": mat.links_per_turn}
     rec.report(started, stepping_s, steps, t, settings, n)
 

@@ -63,7 +63,8 @@ struct Args {
     #[arg(long)]
     links_per_turn: Option<u32>,
     /// Natural frequency of every contact, floor and layer-on-layer (Hz). Rapier's defaults,
-    /// 30 between bodies and 60 on the floor, let the coil sink 69 um and slump.
+    /// 30 between bodies and 60 on the floor, let the coil sink 69 um into the floor and,
+    /// held by contacts, slump.
     #[arg(long, default_value_t = 1.0e4)]
     contact_hz: f64,
     /// Natural frequency of the joints (Hz; default: rapier's, 1e6).
@@ -84,9 +85,9 @@ struct Args {
     /// default: b / 100).
     #[arg(long)]
     release_m: Option<f64>,
-    /// Round each link's ends: a capsule (radius b/2) instead of a cuboid. A chain of
-    /// cuboids rolls on corners and each landing link is an impact; the capsules' outline
-    /// is smooth.
+    /// Round each link's ends: a capsule (radius half the collider thickness) instead of a
+    /// cuboid. The coil's outline is then smooth, but a landing link still moves the pivot
+    /// from one of its ends to the other: an impact all the same (docs/peers.md).
     #[arg(long)]
     capsules: bool,
     /// Thickness of the links' colliders (m; default: the tape's, b). The floor is put at
@@ -160,7 +161,8 @@ fn main() -> anyhow::Result<()> {
     let nodes = spiral.link_nodes(lpt);
     let rot0 = spiral.rotation_with_bottom_at(spiral.psi_out);
     let low = rotate(spiral.point(spiral.psi_out), rot0);
-    // The floor is y = 0 and the links are b thick, so the midline of laid tape is at b/2.
+    // Laid tape has its midline at y = b/2, the floor half a collider thickness below
+    // (y = 0 for colliders b thick).
     let contact = [0.0, 0.5 * b];
     let origin = [contact[0] - low[0], contact[1] - low[1]];
     let world_node = |psi: f64| {
@@ -186,7 +188,7 @@ fn main() -> anyhow::Result<()> {
     let ground = world.insert_body(RigidBodyBuilder::fixed());
     world.insert_collider(
         ColliderBuilder::new(SharedShape::halfspace(Vector::Y))
-            .translation(Vector::new(0.0, 0.5 * (b - half_t_m * 2.0)))
+            .translation(Vector::new(0.0, 0.5 * b - half_t_m))
             .friction(scene.floor.friction)
             .user_data(FLOOR_TAG)
             .collision_groups(InteractionGroups::new(

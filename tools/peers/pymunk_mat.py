@@ -92,7 +92,7 @@ def main() -> None:
 
     e0 = energy()
     meter = LaidMeter(mat, angles - rot0)
-    rec = Recorder("pymunk", mat, e0, args.stop_fraction)
+    rec = Recorder("pymunk", mat, e0, args.stop_fraction, args.max_wall_s)
     next_lock, t, steps, stepping_s = 0, 0.0, 0, 0.0
     while True:
         tick = time.perf_counter()
