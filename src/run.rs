@@ -14,16 +14,18 @@ mod runner;
 pub mod sample;
 pub mod stop;
 
+use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 pub use milestones::{SPOOL_FRACTIONS, milestone_radii};
 pub use report::{
     Approach, BANG_SPLIT_MIN_OF_SCALE, BangReport, Ledger, Milestone, RivalTimes, RunReport,
 };
-pub use sample::Sample;
+pub use sample::{Sample, SampleInputs};
 
 use crate::run::frame::{Event, Frame};
 use crate::scene::Scene;
+use crate::theory::References;
 
 /// An output fed by the run loop.
 pub trait Observer {
@@ -45,6 +47,22 @@ pub trait Observer {
     }
     /// Called for every event, in time order (default: ignored).
     fn observe_event(&mut self, _event: &Event) -> anyhow::Result<()> {
+        Ok(())
+    }
+    /// Whether this observer makes its samples itself, from [`Observer::observe_step`] and
+    /// the references of [`Observer::observe_references`], instead of being handed them by
+    /// [`Observer::observe_sample`] (default: no). An observer on a thread of its own makes
+    /// them there, off the run's thread.
+    fn makes_samples(&self) -> bool {
+        false
+    }
+    /// Called once, after [`Observer::observe_init`], with the run's references, if
+    /// [`Observer::makes_samples`].
+    fn observe_references(&mut self, _refs: &Arc<References>) -> anyhow::Result<()> {
+        Ok(())
+    }
+    /// Called for every sample with what it is made from, if [`Observer::makes_samples`].
+    fn observe_step(&mut self, _step: &SampleInputs) -> anyhow::Result<()> {
         Ok(())
     }
 }

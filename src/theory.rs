@@ -11,7 +11,7 @@ pub mod forces;
 pub mod rivals;
 mod trajectory;
 
-use std::rc::Rc;
+use std::sync::Arc;
 
 use crate::scene::Scene;
 use continuum::{Continuum, ForceTorque, Params};
@@ -26,7 +26,7 @@ pub struct References {
     /// Eq. (17).
     pub force_torque: ForceTorque,
     /// The exact-geometry model, tabulated once and shared with the exact rival.
-    pub exact: Rc<ExactGeometry>,
+    pub exact: Arc<ExactGeometry>,
     /// The paper's rivals for the scene's case; at most one is the valid reference.
     pub rivals: Vec<Rival>,
     /// The case's analytic constraint forces.
@@ -48,7 +48,7 @@ impl References {
     pub fn new(scene: &Scene) -> Self {
         let p = params(scene);
         let r_end = 0.5 * scene.stop.bang_radius_m;
-        let exact = Rc::new(exact_geometry(scene));
+        let exact = Arc::new(exact_geometry(scene));
         Self {
             continuum: Continuum::new(p, r_end),
             force_torque: ForceTorque::new(p),

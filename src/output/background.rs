@@ -1,14 +1,17 @@
 //! Observers on a thread of their own: the run loop hands each call over a bounded channel
-//! and goes on stepping, while the thread formats and writes. Each observer still sees every
-//! call, in the run's order, so the files are the same bytes; the main job's numbers to text
-//! and its compressed log then cost the run loop only the copy of a sample.
+//! and goes on stepping, while the thread makes the samples (the references beside each
+//! step: [`SampleInputs::sample`]), formats and writes. Each observer still sees every call,
+//! in the run's order, so the files are the same bytes; the main job's references, numbers
+//! to text and compressed log then cost the run loop only the copy of a step.
 
+use std::sync::Arc;
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::thread::{Scope, ScopedJoinHandle};
 
 use crate::run::frame::{Event, Frame};
-use crate::run::{Observer, RunReport, Sample};
+use crate::run::{Observer, RunReport, Sample, SampleInputs};
 use crate::scene::Scene;
+use crate::theory::References;
 
 /// Calls handed over at once: one wake-up of the thread per batch, not per sample.
 const BATCH: usize = 64;
@@ -18,6 +21,8 @@ const QUEUE: usize = 16;
 /// One call of [`Observer`].
 enum Call {
     Init(Box<Scene>),
+    References(Arc<References>),
+    Step(Box<SampleInputs>),
     Sample(Box<Sample>),
     Frame(Box<Frame>),
     Event(Box<Event>),
@@ -85,10 +90,27 @@ fn serve(
     observers: &mut [&mut (dyn Observer + Send)],
     inbox: &Receiver<Vec<Call>>,
 ) -> anyhow::Result<()> {
+    let mut refs = None;
     for call in inbox.iter().flatten() {
+        let made;
+        let call = match call {
+            Call::References(r) => {
+                refs = Some(r);
+                continue;
+            }
+            Call::Step(step) => {
+                let refs = refs
+                    .as_ref()
+                    .ok_or_else(|| anyhow::anyhow!("a step came before the references"))?;
+                made = Call::Sample(Box::new(step.sample(refs)));
+                &made
+            }
+            ref other => other,
+        };
         for o in observers.iter_mut() {
-            match &call {
+            match call {
                 Call::Init(scene) => o.observe_init(scene)?,
+                Call::References(_) | Call::Step(_) => {}
                 Call::Sample(sample) => o.observe_sample(sample)?,
                 Call::Frame(frame) => o.observe_frame(frame)?,
                 Call::Event(event) => o.observe_event(event)?,
@@ -108,6 +130,15 @@ impl Observer for Background<'_> {
     }
     fn observe_sample(&mut self, sample: &Sample) -> anyhow::Result<()> {
         self.send(Call::Sample(Box::new(*sample)))
+    }
+    fn makes_samples(&self) -> bool {
+        true
+    }
+    fn observe_references(&mut self, refs: &Arc<References>) -> anyhow::Result<()> {
+        self.send(Call::References(Arc::clone(refs)))
+    }
+    fn observe_step(&mut self, step: &SampleInputs) -> anyhow::Result<()> {
+        self.send(Call::Step(Box::new(*step)))
     }
     fn wants_frames(&self) -> bool {
         self.frames
@@ -140,7 +171,8 @@ mod tests {
     /// Records what it is called with; fails at its `fail_at`-th sample.
     #[derive(Default)]
     struct Log {
-        seen: Vec<f64>,
+        /// Every sample's numbers, as bits (a NaN equals itself).
+        seen: Vec<Vec<u64>>,
         finals: usize,
         fail_at: Option<usize>,
     }
@@ -153,7 +185,9 @@ mod tests {
             if self.fail_at == Some(self.seen.len()) {
                 anyhow::bail!("disk full at sample {}", self.seen.len());
             }
-            self.seen.push(sample.t_s);
+            let fields = crate::output::fields::fields(sample)?;
+            self.seen
+                .push(fields.into_iter().map(|(_, v)| v.to_bits()).collect());
             Ok(())
         }
         fn observe_final(&mut self, _report: &RunReport) -> anyhow::Result<()> {
@@ -174,7 +208,7 @@ mod tests {
     }
 
     #[test]
-    fn the_thread_sees_what_the_loop_would_have_shown() {
+    fn the_thread_makes_the_samples_the_loop_would_have_shown() {
         let scene = scene();
         let mut direct = Log::default();
         crate::run::run(&scene, &mut [&mut direct]).unwrap();

@@ -2,6 +2,7 @@
 //! observation: the guards, the events, the milestones, the approach, a sample and a frame
 //! for the observers, and at the end the [`RunReport`]. Only the model's step is timed.
 
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -14,7 +15,7 @@ use crate::run::guard::{self, Guard};
 use crate::run::limits::Applicability;
 use crate::run::milestones::Milestones;
 use crate::run::report::{Approach, BangReport, Ledger, RunReport};
-use crate::run::sample::{make_sample, set_forces};
+use crate::run::sample::SampleInputs;
 use crate::run::stop::StopReason;
 use crate::scene::Scene;
 use crate::theory::References;
@@ -29,7 +30,7 @@ const GHOST_POINTS_PER_TURN: u32 = 32;
 /// The loop's state: the model, its references, and what the run has seen so far.
 pub(crate) struct Runner<'s> {
     scene: &'s Scene,
-    refs: References,
+    refs: Arc<References>,
     model: Model,
     initial: Observation,
     e0: f64,
@@ -66,10 +67,13 @@ impl<'s> Runner<'s> {
         scene: &'s Scene,
         observers: &mut [&mut dyn Observer],
     ) -> anyhow::Result<Self> {
-        let refs = References::new(scene);
+        let refs = Arc::new(References::new(scene));
         let mut model = Model::new(scene);
         for o in observers.iter_mut() {
             o.observe_init(scene)?;
+            if o.makes_samples() {
+                o.observe_references(&refs)?;
+            }
         }
         let initial = model.observe();
         let e0 = initial.kinetic_j + initial.potential_j;
@@ -156,10 +160,8 @@ impl<'s> Runner<'s> {
             // Keep the last finite step as the end of the run, logged: no NaN reaches a
             // table.
             if let (Some(p), false) = (self.prev, self.prev_logged) {
-                let sample = make_sample(&p, self.xdot, self.e0, &self.refs);
-                for o in observers.iter_mut() {
-                    o.observe_sample(&sample)?;
-                }
+                let step = SampleInputs::new(&p, self.xdot, self.e0, None);
+                self.send_sample(&step, observers)?;
             }
             return Ok(Some(StopReason::Guard(trip.clone())));
         }
@@ -255,13 +257,9 @@ impl<'s> Runner<'s> {
         self.prev_logged = obs.t_s >= self.next_sample || last_step || released;
         // A run nobody watches (a sweep's) makes no samples: the report does not need them.
         if self.prev_logged && !observers.is_empty() {
-            let mut sample = make_sample(obs, self.xdot, self.e0, &self.refs);
-            if let Some(mean) = self.window.sample(rolling) {
-                set_forces(&mut sample, &mean, rolling, &self.refs);
-            }
-            for o in observers.iter_mut() {
-                o.observe_sample(&sample)?;
-            }
+            let forces = self.window.sample(rolling).map(|mean| (mean, rolling));
+            let step = SampleInputs::new(obs, self.xdot, self.e0, forces);
+            self.send_sample(&step, observers)?;
             self.next_sample = obs.t_s + self.scene.output.sample_interval_s;
             // The bang is over in a few milliseconds of its start: sample it at times since
             // the release growing geometrically from one step, up to the sample interval.
@@ -277,6 +275,24 @@ impl<'s> Runner<'s> {
             }
             let behind = ((obs.t_s - self.next_frame) / self.frame_interval + 1.0).floor();
             self.next_frame += self.frame_interval * behind;
+        }
+        Ok(())
+    }
+
+    /// Hands a sample to the observers: what it is made from to those that make their own,
+    /// the sample, made once, to the others.
+    fn send_sample(
+        &self,
+        step: &SampleInputs,
+        observers: &mut [&mut dyn Observer],
+    ) -> anyhow::Result<()> {
+        let mut made = None;
+        for o in observers.iter_mut() {
+            if o.makes_samples() {
+                o.observe_step(step)?;
+            } else {
+                o.observe_sample(made.get_or_insert_with(|| step.sample(&self.refs)))?;
+            }
         }
         Ok(())
     }

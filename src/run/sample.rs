@@ -190,6 +190,43 @@ fn eq14_angular_momentum(refs: &References, f: f64, xdot: f64) -> f64 {
     m * PI * r * r * rdot * (big_r * big_r + 2.0 * r * r) / (b * big_r * big_r)
 }
 
+/// What a sample is made from: the step's observation, the contact line's speed, the energy
+/// at the start and, for a sample with forces, its window's mean. Plain numbers, so an
+/// observer on another thread can make the sample ([`Self::sample`]) with the references.
+#[derive(Debug, Clone, Copy)]
+pub struct SampleInputs {
+    obs: Observation,
+    xdot: f64,
+    e0: f64,
+    /// The forces' window mean, and whether the coil rolls.
+    forces: Option<(WindowMean, bool)>,
+}
+
+impl SampleInputs {
+    pub(crate) fn new(
+        obs: &Observation,
+        xdot: f64,
+        e0: f64,
+        forces: Option<(WindowMean, bool)>,
+    ) -> Self {
+        Self {
+            obs: *obs,
+            xdot,
+            e0,
+            forces,
+        }
+    }
+
+    /// The sample, beside the references `refs`.
+    pub fn sample(&self, refs: &References) -> Sample {
+        let mut sample = make_sample(&self.obs, self.xdot, self.e0, refs);
+        if let Some((mean, rolling)) = &self.forces {
+            set_forces(&mut sample, mean, *rolling, refs);
+        }
+        sample
+    }
+}
+
 pub(crate) fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &References) -> Sample {
     let nan = f64::NAN;
     let c = refs.continuum.state_at_time(obs.t_s);

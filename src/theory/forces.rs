@@ -15,7 +15,7 @@ use crate::theory::params;
 use crate::theory::rivals::{Case, SpoolGeometry, single_turn_spin, slope_energy_rdot, spool_rate};
 
 /// `(N_tot, F_tot)` in N at a laid fraction, `None` where the reference does not exist.
-pub type ForceFn = Box<dyn Fn(f64) -> Option<(f64, f64)>>;
+pub type ForceFn = Box<dyn Fn(f64) -> Option<(f64, f64)> + Send + Sync>;
 
 /// The paper's constraint forces for a scene's case; `None` for the fixed axis (no floor)
 /// and the frictionless cases,

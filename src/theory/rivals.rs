@@ -12,7 +12,7 @@
 //! cases (level, g = 0, slope, frictionless); the spool cases are in `rivals/spool.rs`.
 
 use std::f64::consts::PI;
-use std::rc::Rc;
+use std::sync::Arc;
 
 use serde::Serialize;
 
@@ -110,9 +110,9 @@ pub struct Rival {
     pub valid: bool,
     /// Laid fraction at which this motion stops (its speed falls to zero), if it does.
     pub stall_fraction: Option<f64>,
-    time: Box<dyn Fn(f64) -> Option<f64>>,
+    time: Box<dyn Fn(f64) -> Option<f64> + Send + Sync>,
     /// The inverse of `time`, where a cheaper one than bisection exists.
-    fraction: Option<Box<dyn Fn(f64) -> Option<f64>>>,
+    fraction: Option<Box<dyn Fn(f64) -> Option<f64> + Send + Sync>>,
 }
 
 impl Rival {
@@ -178,7 +178,7 @@ fn from_rate(
     label: &str,
     description: &str,
     valid: bool,
-    rate: impl Fn(f64) -> f64 + 'static,
+    rate: impl Fn(f64) -> f64 + Send + Sync + 'static,
 ) -> Rival {
     // Scan for a stall: the rate is positive just after the start for a moving start.
     let n = 20_000;
@@ -197,8 +197,8 @@ fn from_rate(
         Some(q) => (q + (1.0 - q_end) / f64::from(n), Some(1.0 - q)),
         None => (q_end, None),
     };
-    let traj = std::rc::Rc::new(Trajectory::new(1.0, end, PANELS, rate));
-    let inverse = std::rc::Rc::clone(&traj);
+    let traj = std::sync::Arc::new(Trajectory::new(1.0, end, PANELS, rate));
+    let inverse = std::sync::Arc::clone(&traj);
     Rival {
         label: label.into(),
         description: description.into(),
@@ -214,7 +214,7 @@ fn closed(
     label: &str,
     description: &str,
     valid: bool,
-    time: impl Fn(f64) -> Option<f64> + 'static,
+    time: impl Fn(f64) -> Option<f64> + Send + Sync + 'static,
 ) -> Rival {
     Rival {
         label: label.into(),
@@ -227,8 +227,8 @@ fn closed(
 }
 
 /// The exact-geometry model of the scene's spiral (on its slope), as a rival sharing it.
-fn exact(e: Rc<ExactGeometry>, valid: bool) -> Rival {
-    let inverse = Rc::clone(&e);
+fn exact(e: Arc<ExactGeometry>, valid: bool) -> Rival {
+    let inverse = Arc::clone(&e);
     let mut rival = closed(
         "exact",
         "exact geometry: the rigid spiral the links form, rolling on its midline (sliding at \
@@ -245,18 +245,18 @@ fn exact(e: Rc<ExactGeometry>, valid: bool) -> Rival {
 /// All rivals of a scene, the valid reference first. Every case but the fixed axis
 /// tabulates the scene's exact-geometry model for its `exact` rival.
 pub fn rivals(scene: &Scene) -> Vec<Rival> {
-    rivals_from(scene, || Rc::new(exact_geometry(scene)))
+    rivals_from(scene, || Arc::new(exact_geometry(scene)))
 }
 
 /// As [`rivals`], with the scene's exact-geometry model (the one [`exact_geometry`] builds)
 /// already tabulated: the `exact` rival shares it instead of tabulating its own.
-pub fn rivals_with(scene: &Scene, model: &Rc<ExactGeometry>) -> Vec<Rival> {
-    rivals_from(scene, || Rc::clone(model))
+pub fn rivals_with(scene: &Scene, model: &Arc<ExactGeometry>) -> Vec<Rival> {
+    rivals_from(scene, || Arc::clone(model))
 }
 
 /// The rivals of the scene's case, taking the exact-geometry model from `model` only for a
 /// case that has an `exact` rival.
-fn rivals_from(scene: &Scene, model: impl FnOnce() -> Rc<ExactGeometry>) -> Vec<Rival> {
+fn rivals_from(scene: &Scene, model: impl FnOnce() -> Arc<ExactGeometry>) -> Vec<Rival> {
     let p = params(scene);
     match Case::of(scene) {
         Case::Coil | Case::ZeroG => coil_rivals(scene, p, model()),
@@ -269,7 +269,7 @@ fn rivals_from(scene: &Scene, model: impl FnOnce() -> Rc<ExactGeometry>) -> Vec<
     }
 }
 
-fn coil_rivals(scene: &Scene, p: Params, model: Rc<ExactGeometry>) -> Vec<Rival> {
+fn coil_rivals(scene: &Scene, p: Params, model: Arc<ExactGeometry>) -> Vec<Rival> {
     let big_r = p.outer_radius_m;
     let ft = ForceTorque::new(p);
     vec![
@@ -297,7 +297,10 @@ fn eq7_rival(scene: &Scene, p: Params) -> Rival {
 }
 
 /// `|r'|` turned into the rate of `q = r^2 / R^2`.
-fn q_rate_from_rdot(big_r: f64, rdot: impl Fn(f64) -> f64) -> impl Fn(f64) -> f64 {
+fn q_rate_from_rdot(
+    big_r: f64,
+    rdot: impl Fn(f64) -> f64 + Send + Sync,
+) -> impl Fn(f64) -> f64 + Send + Sync {
     move |q: f64| {
         let r = big_r * q.max(0.0).sqrt();
         2.0 * r * rdot(r) / (big_r * big_r)
@@ -311,7 +314,7 @@ fn q_rate_from_rdot(big_r: f64, rdot: impl Fn(f64) -> f64) -> impl Fn(f64) -> f6
 ///     - pi M g (R^4 - r^4) sin(a) / (2 b R^2) = E0                                      (70)
 /// ```
 /// Returns `|r'|(r)`, `NaN` where the energy runs out.
-pub fn slope_energy_rdot(p: Params, slope_rad: f64) -> impl Fn(f64) -> f64 {
+pub fn slope_energy_rdot(p: Params, slope_rad: f64) -> impl Fn(f64) -> f64 + Send + Sync {
     let (big_r, b, m, g) = (p.outer_radius_m, p.thickness_m, p.mass_kg, p.g_m_s2);
     let (sa, ca) = slope_rad.sin_cos();
     let potential = move |r: f64| {
@@ -328,7 +331,7 @@ pub fn slope_energy_rdot(p: Params, slope_rad: f64) -> impl Fn(f64) -> f64 {
 /// `|r'|(r)` of eq. (72) as printed (coefficient `4 pi` of the slope term, ERRATA A11), which
 /// has no energy integral: `w = r'^2` is integrated in `u = R - r` by RK4,
 /// `dw/du = 2 [(12 pi^2 r^2 + b^2) w + 3 b^2 g r cos(a) + 4 pi g b r^2 sin(a)] / ((6 pi^2 r^2 + b^2) r)`.
-fn eq72_printed_rdot(p: Params, slope_rad: f64) -> impl Fn(f64) -> f64 {
+fn eq72_printed_rdot(p: Params, slope_rad: f64) -> impl Fn(f64) -> f64 + Send + Sync {
     let (big_r, b, g) = (p.outer_radius_m, p.thickness_m, p.g_m_s2);
     let (sa, ca) = slope_rad.sin_cos();
     let rdot0 = b * p.push_speed_m_s / (2.0 * PI * big_r);
@@ -346,7 +349,7 @@ fn eq72_printed_rdot(p: Params, slope_rad: f64) -> impl Fn(f64) -> f64 {
 /// First integrals of the torque-type equations `r r'' + k r'^2 + c = 0` with
 /// `c = g b sin(a) / (3 pi)`: `r'^2 r^(2k) = r0'^2 R^(2k) + (c / k) (R^(2k) - r^(2k))`.
 /// `k = 10/3` is eq. (68); `k = 2` is eq. (73) corrected per ERRATA A12.
-fn torque_form_rdot(p: Params, slope_rad: f64, k: f64) -> impl Fn(f64) -> f64 {
+fn torque_form_rdot(p: Params, slope_rad: f64, k: f64) -> impl Fn(f64) -> f64 + Send + Sync {
     let (big_r, b, g) = (p.outer_radius_m, p.thickness_m, p.g_m_s2);
     let c = g * b * slope_rad.sin() / (3.0 * PI);
     let rdot0 = b * p.push_speed_m_s / (2.0 * PI * big_r);
@@ -357,7 +360,7 @@ fn torque_form_rdot(p: Params, slope_rad: f64, k: f64) -> impl Fn(f64) -> f64 {
     }
 }
 
-fn slope_rivals(scene: &Scene, p: Params, model: Rc<ExactGeometry>) -> Vec<Rival> {
+fn slope_rivals(scene: &Scene, p: Params, model: Arc<ExactGeometry>) -> Vec<Rival> {
     let a = scene.floor.slope_deg.to_radians();
     let big_r = p.outer_radius_m;
     vec![
@@ -409,7 +412,7 @@ fn tabulate_w(w0: f64, theta_end: f64, n: usize, dw: impl Fn(f64, f64) -> f64) -
 }
 
 /// Linear interpolation of a [`tabulate_w`] table, as `sqrt(w)` at `theta`.
-fn table_spin(table: Vec<f64>, theta_end: f64) -> impl Fn(f64) -> f64 {
+fn table_spin(table: Vec<f64>, theta_end: f64) -> impl Fn(f64) -> f64 + Send + Sync {
     let n = table.len() - 1;
     let h = theta_end / n as f64;
     move |theta: f64| {
@@ -433,7 +436,7 @@ fn frictionless_coil_inertia(p: Params, r: f64) -> f64 {
     0.5 * flat * v_flat * v_flat + 0.5 * mc * (v_x * v_x + 1.0) + 0.25 * mc * r * r * omega * omega
 }
 
-fn frictionless_coil_rivals(scene: &Scene, p: Params, model: Rc<ExactGeometry>) -> Vec<Rival> {
+fn frictionless_coil_rivals(scene: &Scene, p: Params, model: Arc<ExactGeometry>) -> Vec<Rival> {
     let big_r = p.outer_radius_m;
     let (b, m, g) = (p.thickness_m, p.mass_kg, p.g_m_s2);
     // Started spinning in place: surface speed r omega0 = push.

@@ -4,7 +4,7 @@
 docs/peers.md's table (between its PEERS-TABLE markers) and docs/peers.svg (wall time
 against error). Builds nothing: `cargo build --release --example plain-rapier` first.
 
-    /work/peers-venv/bin/python tools/peers/compare.py [--rounds 5] [--only uncoil,mujoco]
+    python tools/peers/compare.py [--rounds 5] [--only uncoil,mujoco]
 """
 
 from __future__ import annotations

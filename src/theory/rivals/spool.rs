@@ -5,7 +5,7 @@
 //! machinery, the solid coil's cases and the choice of case are in [`rivals`](super).
 
 use std::f64::consts::PI;
-use std::rc::Rc;
+use std::sync::Arc;
 
 use super::{Case, F_END, Rival, SpoolGeometry, closed, exact, from_rate, table_spin, tabulate_w};
 use crate::scene::Scene;
@@ -17,7 +17,7 @@ use crate::theory::exact::ExactGeometry;
 /// E = M (r^2 theta'^2 + g r) (1 - (theta - sin theta) / (2 pi)) = M (r^2 theta0'^2 + g r)
 /// ```
 /// Returns `theta'(theta)`.
-pub fn single_turn_spin(r: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 {
+pub fn single_turn_spin(r: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 + Send + Sync {
     move |theta: f64| {
         let keep = 1.0 - (theta - theta.sin()) / (2.0 * PI);
         (((r * r * spin0 * spin0 + g * r) / keep - g * r) / (r * r)).sqrt()
@@ -48,7 +48,7 @@ fn eq62_w(r: f64, g: f64, spin0: f64, theta_end: f64, n: usize, lead: f64) -> Ve
 /// theta'^2 = theta0'^2 + g (theta^2 - 2 + 2 cos theta) / (2 pi r)
 /// ```
 /// so the tape leaves the spool (theta = 2 pi) at `v^2 = 2 pi g r + r^2 theta0'^2` (B17).
-pub fn vertical_spin(r: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 {
+pub fn vertical_spin(r: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 + Send + Sync {
     move |theta: f64| {
         (spin0 * spin0 + g * (theta * theta - 2.0 + 2.0 * theta.cos()) / (2.0 * PI * r)).sqrt()
     }
@@ -93,7 +93,7 @@ pub(super) fn vertical_rivals(scene: &Scene) -> Vec<Rival> {
     ]
 }
 
-pub(super) fn single_turn_rivals(scene: &Scene, model: Rc<ExactGeometry>) -> Vec<Rival> {
+pub(super) fn single_turn_rivals(scene: &Scene, model: Arc<ExactGeometry>) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
     let (r, g, w0) = (sg.r_m, scene.gravity.g_m_s2, sg.spin0_rad_s);
     let spin = single_turn_spin(r, g, w0);
@@ -125,7 +125,7 @@ pub(super) fn single_turn_rivals(scene: &Scene, model: Rc<ExactGeometry>) -> Vec
 }
 
 /// A spool rival's spin `theta'(theta)` (rad/s), from its energy integral.
-pub type Spin = Box<dyn Fn(f64) -> f64>;
+pub type Spin = Box<dyn Fn(f64) -> f64 + Send + Sync>;
 
 /// The energy integrals of a spool case as spins `theta'(theta)`, labelled as in
 /// [`rivals`](super::rivals). They treat the wound tape as centred on the axis; the real
@@ -153,7 +153,7 @@ pub fn spool_spins(scene: &Scene) -> Vec<(String, Spin)> {
 
 /// Eq. (79) through its energy integral (78) (first form of (80) corrected per A15):
 /// `theta'^2 (1 - u) = theta0'^2 + g u / r`, `u = r theta / l`. Returns `u'(u)`.
-pub fn spool_rate(r: f64, l: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 {
+pub fn spool_rate(r: f64, l: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 + Send + Sync {
     move |u: f64| r / l * ((spin0 * spin0 + g * u / r) / (1.0 - u)).sqrt()
 }
 
@@ -163,7 +163,7 @@ pub fn spool_time_from_rest(r: f64, l: f64, g: f64, u: f64) -> f64 {
     l / r * (r / g).sqrt() * ((u * (1.0 - u)).sqrt() + u.sqrt().asin())
 }
 
-pub(super) fn spool_rivals(scene: &Scene, model: Rc<ExactGeometry>) -> Vec<Rival> {
+pub(super) fn spool_rivals(scene: &Scene, model: Arc<ExactGeometry>) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
     let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.gravity.g_m_s2, sg.spin0_rad_s);
     vec![
@@ -208,7 +208,7 @@ fn eq79_rival(scene: &Scene) -> Rival {
 
 /// App. D with the flat tape at its material velocity (ERRATA A18):
 /// `theta'^2 (1 - u^2) = theta0'^2 + 2 g theta / l`, `u = r theta / l`. Returns `theta'(theta)`.
-fn a18_spin(r: f64, l: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 {
+fn a18_spin(r: f64, l: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 + Send + Sync {
     move |theta: f64| {
         let u = r * theta / l;
         ((spin0 * spin0 + 2.0 * g * theta / l) / (1.0 - u * u)).sqrt()
@@ -217,13 +217,13 @@ fn a18_spin(r: f64, l: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 {
 
 /// Eqs. (104)-(105) as printed, the flat tape at the centroid velocity of (101):
 /// `theta'^2 (4 l - 3 r theta) = 8 g theta + 4 l theta0'^2`. Returns `theta'(theta)`.
-fn eq104_spin(r: f64, l: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 {
+fn eq104_spin(r: f64, l: f64, g: f64, spin0: f64) -> impl Fn(f64) -> f64 + Send + Sync {
     move |theta: f64| {
         ((8.0 * g * theta + 4.0 * l * spin0 * spin0) / (4.0 * l - 3.0 * r * theta)).sqrt()
     }
 }
 
-pub(super) fn frictionless_spool_rivals(scene: &Scene, model: Rc<ExactGeometry>) -> Vec<Rival> {
+pub(super) fn frictionless_spool_rivals(scene: &Scene, model: Arc<ExactGeometry>) -> Vec<Rival> {
     let sg = SpoolGeometry::of(scene);
     let (r, l, g, w0) = (sg.r_m, sg.l_m, scene.gravity.g_m_s2, sg.spin0_rad_s);
     vec![
