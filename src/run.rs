@@ -79,7 +79,18 @@ pub fn run_until(
     observers: &mut [&mut dyn Observer],
     stop: &AtomicBool,
 ) -> anyhow::Result<RunReport> {
-    let mut runner = runner::Runner::new(scene, observers)?;
+    run_until_with(scene, Arc::new(References::new(scene)), observers, stop)
+}
+
+/// [`run_until`] with the scene's references already built (`References::new(scene)`, by
+/// a sweep while its previous run stepped).
+pub fn run_until_with(
+    scene: &Scene,
+    refs: Arc<References>,
+    observers: &mut [&mut dyn Observer],
+    stop: &AtomicBool,
+) -> anyhow::Result<RunReport> {
+    let mut runner = runner::Runner::new(scene, refs, observers)?;
     loop {
         if let Some(end) = runner.step(observers, stop)? {
             return runner.finish(end, observers);

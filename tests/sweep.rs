@@ -369,3 +369,29 @@ fn run_with_set_then_plot() {
             "discretisation.links_per_turn = 5000: must be >= 3 and <= 4096",
         ));
 }
+
+/// One run at a time, each one's references built while the run before it steps, gives the
+/// table that runs side by side on a pool give.
+#[test]
+fn one_at_a_time_and_side_by_side_give_one_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let (one, two) = (dir.path().join("one"), dir.path().join("two"));
+    sweep(&one, &["--quiet"]).success();
+    uncoil()
+        .arg("sweep")
+        .arg(yoga())
+        .args(VARY)
+        .arg("--out")
+        .arg(&two)
+        .args(["--jobs", "2", "--quiet"])
+        .assert()
+        .success();
+    let read = |d: &Path| {
+        let mut t = SweepTable::read(&d.join("sweep.csv")).unwrap();
+        t.rows.sort();
+        t
+    };
+    let (a, b) = (read(&one), read(&two));
+    assert_eq!(a.rows.len(), 2);
+    assert_eq!(deterministic(&a), deterministic(&b));
+}

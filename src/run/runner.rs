@@ -65,9 +65,9 @@ impl<'s> Runner<'s> {
     /// and the exact model's warning.
     pub(crate) fn new(
         scene: &'s Scene,
+        refs: Arc<References>,
         observers: &mut [&mut dyn Observer],
     ) -> anyhow::Result<Self> {
-        let refs = Arc::new(References::new(scene));
         let mut model = Model::new(scene);
         for o in observers.iter_mut() {
             o.observe_init(scene)?;

@@ -34,7 +34,8 @@ pub use self::table::{Missing, SweepTable, csv_line, merge, write_merged};
 
 use self::grid::settings;
 use self::row::one_line;
-use crate::run::{RunReport, milestone_radii, run_until};
+use crate::run::{RunReport, milestone_radii, run_until, run_until_with};
+use crate::theory::References;
 use crate::scene::Scene;
 
 /// What a sweep did.
@@ -149,8 +150,11 @@ impl Sweep {
             stopped: Mutex::new(0),
             stop: &opts.stop,
         };
-        let result: anyhow::Result<()> =
-            pool.install(|| mine.par_iter().try_for_each(|&i| runner.run_one(i)));
+        let result: anyhow::Result<()> = if runner.jobs == 1 {
+            runner.run_in_turn(&mine)
+        } else {
+            pool.install(|| mine.par_iter().try_for_each(|&i| runner.run_one(i, None)))
+        };
         let Runner {
             bar,
             failed,
@@ -245,15 +249,40 @@ struct Runner<'a> {
 }
 
 impl Runner<'_> {
-    /// Runs combination `i`, appends its row and reports it.
-    fn run_one(&self, i: usize) -> anyhow::Result<()> {
+    /// Runs the combinations `mine` one at a time, each one's references tabulated on a
+    /// thread of their own while the run before it steps: the second core, idle otherwise,
+    /// takes the one part of a run that does not depend on the run before.
+    fn run_in_turn(&self, mine: &[usize]) -> anyhow::Result<()> {
+        let scenes = &self.sweep.scenes;
+        std::thread::scope(|s| {
+            let tabulate = |i: usize| s.spawn(move || Arc::new(References::new(&scenes[i])));
+            let mut ahead = mine.first().map(|&i| tabulate(i));
+            for (k, &i) in mine.iter().enumerate() {
+                if self.stop.load(Ordering::SeqCst) {
+                    break;
+                }
+                // A tabulation that panicked is redone in the run, which reports it.
+                let refs = ahead.take().and_then(|t| t.join().ok());
+                ahead = mine.get(k + 1).map(|&j| tabulate(j));
+                self.run_one(i, refs)?;
+            }
+            Ok(())
+        })
+    }
+
+    /// Runs combination `i` (with its references, if already built), appends its row and
+    /// reports it.
+    fn run_one(&self, i: usize, refs: Option<Arc<References>>) -> anyhow::Result<()> {
         if self.stop.load(Ordering::SeqCst) {
             return Ok(());
         }
         let combo = &self.sweep.combos[i];
         let scene = &self.sweep.scenes[i];
         let started = Instant::now();
-        let outcome = catch_unwind(AssertUnwindSafe(|| run_until(scene, &mut [], self.stop)));
+        let outcome = catch_unwind(AssertUnwindSafe(|| match refs {
+            Some(refs) => run_until_with(scene, refs, &mut [], self.stop),
+            None => run_until(scene, &mut [], self.stop),
+        }));
         let result = match outcome {
             Ok(Ok(report)) => Ok(report),
             Ok(Err(e)) => Err(format!("{e:#}")),
