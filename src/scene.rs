@@ -309,6 +309,15 @@ mass_kg = 1.5
 contact_speed_m_s = 0.3
 ";
 
+    /// The yoga mat run for `max_time_s` of simulated time and drawn never: a short run for
+    /// the tests of what a run hands its observers.
+    pub(crate) fn short_yoga(max_time_s: f64) -> Scene {
+        let text = format!("{MINIMAL}\n[stop]\nmax_time_s = {max_time_s}\n");
+        let mut scene = Scene::from_toml_str(&text, "short").expect("a valid scene");
+        scene.output.scene_rate_hz = 0.0;
+        scene
+    }
+
     pub(crate) fn shipped(name: &str) -> Scene {
         let path = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("scenes")

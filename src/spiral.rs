@@ -254,15 +254,7 @@ impl SpiralMoments {
     /// The midline's length between `psi_in` and `psi`: [`Self::at`]`(psi)[0]`, bit for bit,
     /// without the three moments' quadratures.
     pub fn length_at(&self, psi: f64) -> f64 {
-        let psi = psi.clamp(self.spiral.psi_in, self.spiral.psi_out);
-        let k =
-            (((psi - self.spiral.psi_in) / self.step).floor() as usize).min(self.table.len() - 1);
-        let lo = self.spiral.psi_in + self.step * k as f64;
-        let base = self.table[k][0];
-        if psi <= lo {
-            return base;
-        }
-        base + self.spiral.arc(lo, psi)
+        self.length_at_near(psi, &mut None)
     }
 
     /// [`Self::length_at`], bit for bit, for many `psi` in a row: `start` keeps the panel

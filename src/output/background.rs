@@ -197,14 +197,7 @@ mod tests {
     }
 
     fn scene() -> Scene {
-        let mut scene = Scene::from_toml_str(
-            "[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\nmass_kg = 1.5\n\
-             [push]\ncontact_speed_m_s = 0.3\n[stop]\nmax_time_s = 0.05\n",
-            "short",
-        )
-        .unwrap();
-        scene.output.scene_rate_hz = 0.0;
-        scene
+        crate::scene::tests::short_yoga(0.05)
     }
 
     #[test]

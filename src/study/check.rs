@@ -452,13 +452,7 @@ mod tests {
 
     #[test]
     fn a_report_reads_back_unless_a_number_is_null() {
-        let mut scene = crate::scene::Scene::from_toml_str(
-            "[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\nmass_kg = 1.5\n\
-             [push]\ncontact_speed_m_s = 0.3\n[stop]\nmax_time_s = 0.05\n",
-            "short",
-        )
-        .unwrap();
-        scene.output.scene_rate_hz = 0.0;
+        let scene = crate::scene::tests::short_yoga(0.05);
         let report = crate::run::run(&scene, &mut []).unwrap();
         let mut v = serde_json::to_value(&report).unwrap();
         assert_eq!(report_problem(&v.to_string()), None);

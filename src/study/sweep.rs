@@ -35,8 +35,8 @@ pub use self::table::{Missing, SweepTable, csv_line, merge, write_merged};
 use self::grid::settings;
 use self::row::one_line;
 use crate::run::{RunReport, milestone_radii, run_until, run_until_with};
-use crate::theory::References;
 use crate::scene::Scene;
+use crate::theory::References;
 
 /// What a sweep did.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -417,13 +417,7 @@ mod tests {
 
     #[test]
     fn a_row_has_a_cell_under_every_column() {
-        let mut scene = crate::scene::Scene::from_toml_str(
-            "[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\nmass_kg = 1.5\n\
-             [push]\ncontact_speed_m_s = 0.3\n[stop]\nmax_time_s = 0.02\n",
-            "short",
-        )
-        .unwrap();
-        scene.output.scene_rate_hz = 0.0;
+        let scene = crate::scene::tests::short_yoga(0.02);
         let report = crate::run::run(&scene, &mut []).unwrap();
         let labels: Vec<String> = report.milestones.iter().map(|m| m.label.clone()).collect();
         let columns = result_columns(&labels);
