@@ -395,3 +395,25 @@ fn one_at_a_time_and_side_by_side_give_one_table() {
     assert_eq!(a.rows.len(), 2);
     assert_eq!(deterministic(&a), deterministic(&b));
 }
+
+#[test]
+fn a_key_varied_twice_exits_2_and_runs_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    uncoil()
+        .arg("sweep")
+        .arg(yoga())
+        .args([
+            "--vary",
+            "solver.iterations=2,4",
+            "--vary",
+            "solver.iterations=8",
+        ])
+        .arg("--out")
+        .arg(dir.path())
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains(
+            "--vary solver.iterations: varied twice",
+        ));
+    assert!(!dir.path().join("sweep.csv").exists());
+}

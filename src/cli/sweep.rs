@@ -187,6 +187,20 @@ pub fn sweep(args: SweepArgs) -> ExitCode {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
+    // A key varied twice would be two columns of one name in sweep.csv, and a grid no merge
+    // could check.
+    if let Some(twice) = args
+        .vary
+        .iter()
+        .enumerate()
+        .find(|(k, v)| args.vary[..*k].iter().any(|w| w.key == v.key))
+    {
+        eprintln!(
+            "error: --vary {}: varied twice; give all its values in one --vary",
+            twice.1.key
+        );
+        return Exit::BadInput.into();
+    }
     let sweep = match Sweep::new(&text, &stem, &args.vary) {
         Ok(s) => s,
         Err(e) => {

@@ -77,9 +77,14 @@ impl<'scope> Background<'scope> {
     fn join(&mut self) -> anyhow::Result<()> {
         self.calls = None;
         match self.thread.take() {
-            Some(thread) => thread
-                .join()
-                .unwrap_or_else(|_| Err(anyhow::anyhow!("the output thread panicked"))),
+            Some(thread) => thread.join().unwrap_or_else(|panic| {
+                let why = panic
+                    .downcast_ref::<&str>()
+                    .map(|s| (*s).to_owned())
+                    .or_else(|| panic.downcast_ref::<String>().cloned())
+                    .unwrap_or_default();
+                Err(anyhow::anyhow!("the output thread panicked: {why}"))
+            }),
             None => Err(anyhow::anyhow!("the output thread has already ended")),
         }
     }
@@ -158,9 +163,12 @@ impl Observer for Background<'_> {
 
 impl Drop for Background<'_> {
     /// A run that ends in an error never sends its final call: the channel's close ends the
-    /// thread, and the scope joins it.
+    /// thread, which is joined here, its own error or panic set aside for the run's.
     fn drop(&mut self) {
         self.calls = None;
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
     }
 }
 

@@ -255,11 +255,15 @@ impl<'s> Runner<'s> {
         let rolling = obs.phase == Phase::Rolling;
         let released = !rolling && self.prev.is_some_and(|p| p.phase == Phase::Rolling);
         self.prev_logged = obs.t_s >= self.next_sample || last_step || released;
-        // A run nobody watches (a sweep's) makes no samples: the report does not need them.
-        if self.prev_logged && !observers.is_empty() {
+        if self.prev_logged {
+            // The window is read (and trimmed) at every sample, watched or not.
             let forces = self.window.sample(rolling).map(|mean| (mean, rolling));
-            let step = SampleInputs::new(obs, self.xdot, self.e0, forces);
-            self.send_sample(&step, observers)?;
+            // A run nobody watches (a sweep's) makes no samples: the report does not need
+            // them.
+            if !observers.is_empty() {
+                let step = SampleInputs::new(obs, self.xdot, self.e0, forces);
+                self.send_sample(&step, observers)?;
+            }
             self.next_sample = obs.t_s + self.scene.output.sample_interval_s;
             // The bang is over in a few milliseconds of its start: sample it at times since
             // the release growing geometrically from one step, up to the sample interval.

@@ -231,7 +231,7 @@ pub fn csv_problems(text: &str, columns: &[String]) -> Vec<String> {
             continue;
         }
         for (cell, column) in cells.iter().zip(columns.iter()) {
-            if cell.is_empty() {
+            if cell.is_empty() || problems.len() > 10 {
                 continue;
             }
             if !cell.parse::<f64>().is_ok_and(f64::is_finite) {

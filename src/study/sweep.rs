@@ -257,6 +257,7 @@ impl Runner<'_> {
         std::thread::scope(|s| {
             let tabulate = |i: usize| s.spawn(move || Arc::new(References::new(&scenes[i])));
             let mut ahead = mine.first().map(|&i| tabulate(i));
+            let mut result = Ok(());
             for (k, &i) in mine.iter().enumerate() {
                 if self.stop.load(Ordering::SeqCst) {
                     break;
@@ -264,9 +265,17 @@ impl Runner<'_> {
                 // A tabulation that panicked is redone in the run, which reports it.
                 let refs = ahead.take().and_then(|t| t.join().ok());
                 ahead = mine.get(k + 1).map(|&j| tabulate(j));
-                self.run_one(i, refs)?;
+                result = self.run_one(i, refs);
+                if result.is_err() {
+                    break;
+                }
             }
-            Ok(())
+            // A tabulation left over (stopped, or an error) is waited for here, and a panic
+            // in it is not the sweep's.
+            if let Some(t) = ahead {
+                let _ = t.join();
+            }
+            result
         })
     }
 

@@ -236,12 +236,16 @@ impl ExactGeometry {
     /// `psi` and tabulate the moments in panels, so a last-bit change of `psi` can move a
     /// force by 1e-6 of itself: the bisection is kept, bit for bit, and only guided. Newton's
     /// method ([`SpiralMoments::psi_at_length`]) finds the root first; a midpoint farther
-    /// from it than 1e-11 of `psi` falls on the side the root says without evaluating the
-    /// arc, so some fifteen evaluations replace sixty.
+    /// from it than the margin falls on the side the root says without evaluating the arc,
+    /// so some fifteen evaluations replace sixty. The margin is 1e-11 of `psi`, and never
+    /// less than eight steps of the test's own rounding: `1 - length / total` moves in steps
+    /// of `EPSILON`, which near the core of a tape of a thousand turns span more `psi` than
+    /// 1e-11 of it.
     pub fn psi_at_fraction(&self, f: f64) -> f64 {
         let total = self.spiral.length();
         let guess = self.moments.psi_at_length((1.0 - f) * total);
-        let margin = 1e-11 * guess.abs().max(1.0);
+        let rounding = f64::EPSILON * total / (self.spiral.a_m * (1.0 + guess * guess).sqrt());
+        let margin = 1e-11 * guess.abs().max(1.0) + 8.0 * rounding;
         // `laid_fraction(mid)`, bit for bit, its panel's start kept from one midpoint to the
         // next.
         let mut start = None;

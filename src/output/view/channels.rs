@@ -121,7 +121,9 @@ fn coarse(value: f32) -> f32 {
         return value;
     }
     let bits = (value.to_bits() + (1 << (DROP - 1))) & !((1 << DROP) - 1);
-    f32::from_bits(bits)
+    let rounded = f32::from_bits(bits);
+    // Within a step of f32::MAX the rounding would carry into infinity: kept as it is.
+    if rounded.is_finite() { rounded } else { value }
 }
 
 impl Encode for State {
@@ -327,6 +329,8 @@ mod tests {
             assert_eq!(coarse(coarse(v)), coarse(v));
         }
         assert_eq!(coarse(1.5), 1.5);
+        assert_eq!(coarse(f32::MAX), f32::MAX);
+        assert_eq!(coarse(-f32::MAX), -f32::MAX);
         assert!(coarse(f32::NAN).is_nan());
         assert_eq!(coarse(0.1).to_bits() & 0xff, 0);
     }

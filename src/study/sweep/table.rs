@@ -279,18 +279,22 @@ pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<(SweepTable, Missing)> {
         .sort_by_key(|r| r[ic].parse::<usize>().unwrap_or(usize::MAX));
     Ok((m, missing))
 }
-/// The size of the grid `t`'s rows come from: the product over the varied keys of the values
-/// its rows hold. `None` for a table without result columns, whose keys are not known.
+/// The size of the grid `t`'s rows come from: the product over the varied keys' columns
+/// (those between `index` and `links`) of the values its rows hold, a number however it is
+/// spelt (`0.1`, `0.10`). `None` for a table without result columns, whose keys are not
+/// known.
 fn grid_size(t: &SweepTable) -> Option<usize> {
-    t.column(Col::Links.name())?;
+    let links = t.column(Col::Links.name())?;
+    let value = |cell: &str| match cell.parse::<f64>() {
+        Ok(v) => format!("{:x}", v.to_bits()),
+        Err(_) => cell.to_owned(),
+    };
     Some(
-        t.varied_keys()
-            .iter()
-            .map(|k| {
-                let c = t.column(k).expect("a varied key is a column");
+        (1..links)
+            .map(|c| {
                 t.rows
                     .iter()
-                    .map(|r| r[c].as_str())
+                    .map(|r| value(&r[c]))
                     .collect::<std::collections::BTreeSet<_>>()
                     .len()
             })
@@ -389,6 +393,15 @@ mod tests {
         );
         let (_, missing) = merge(&[one, two]).unwrap();
         assert_eq!(missing.combinations, [4, 5]);
+        // A value spelt two ways is one value: nothing missing.
+        let one = write(
+            d,
+            "sweep.1-of-2.csv",
+            &format!("{head}0,1,x,9,ok\n2,1.0,z,9,ok\n"),
+        );
+        let two = write(d, "sweep.2-of-2.csv", &format!("{head}1,1,y,9,ok\n"));
+        let (_, missing) = merge(&[one, two]).unwrap();
+        assert!(missing.is_empty(), "{missing}");
         let one = write(d, "sweep.1-of-3.csv", "index,k,status\n0,a,ok\n3,b,ok\n");
         // An index that is not its file's shard's.
         let wrong = write(d, "sweep.2-of-3.csv", "index,k,status\n2,e,ok\n");

@@ -54,6 +54,29 @@ fn the_guided_bisection_and_the_strided_scan_find_what_the_full_ones_do() {
 }
 
 #[test]
+fn the_guided_bisection_holds_near_the_core_of_a_tape_of_a_thousand_turns() {
+    // Near f = 1 the test `1 - length / total > f` moves in steps of EPSILON, wider in psi
+    // than 1e-11 of it once psi_out / psi passes about 400.
+    let p = Params {
+        outer_radius_m: 0.02,
+        thickness_m: 2e-5,
+        mass_kg: 0.1,
+        core_radius_m: 0.0,
+        g_m_s2: 9.81,
+        push_speed_m_s: 0.1,
+    };
+    let e = ExactGeometry::new(p, 4e-5);
+    for k in 0..=4000 {
+        let f = 1.0 - 1e-4 * f64::from(k) / 4000.0;
+        assert_eq!(
+            e.psi_at_fraction(f).to_bits(),
+            e.psi_at_fraction_by_bisection(f).to_bits(),
+            "f = {f}"
+        );
+    }
+}
+
+#[test]
 fn sliding_kinetic_energy_of_a_thin_spool_is_errata_a18() {
     // 2 T / omega^2 = M r^2 (1 - f^2) for a thin spool (ERRATA A18), f the laid fraction,
     // while many turns remain (with 3 turns left, at f = 0.8, the unbalanced partial turn
