@@ -138,7 +138,7 @@ impl Model {
 
     /// The tape's midline length as the links lay it: the sum of their lengths (m).
     pub fn tape_length_m(&self) -> f64 {
-        self.chain.links.iter().map(|l| l.length_m).sum()
+        self.chain.length_m()
     }
 
     /// Potential energy of the tape lying flat, midline at `b/2`, from `x = 0` on (J).

@@ -135,6 +135,17 @@ impl Chain {
     pub(super) fn len(&self) -> usize {
         self.links.len()
     }
+
+    /// The tape's length, the sum of its links' (m).
+    pub(super) fn length_m(&self) -> f64 {
+        self.links.iter().map(|l| l.length_m).sum()
+    }
+
+    /// `piece`'s nodes in its body's frame, from its near node inward.
+    pub(super) fn piece_nodes(&self, piece: Piece) -> impl Iterator<Item = Vector> + '_ {
+        std::iter::once(self.local[piece.first][0])
+            .chain(self.local[piece.first..=piece.last].iter().map(|l| l[1]))
+    }
 }
 
 /// The energy's books: the ledger, the energy at the last observation, and the last step's

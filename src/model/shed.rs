@@ -105,11 +105,7 @@ impl Model {
 
     /// The piece's nodes in its body frame, from its near node inward.
     pub(super) fn piece_nodes(&self, piece: Piece) -> impl Iterator<Item = Vector> + '_ {
-        std::iter::once(self.chain.local[piece.first][0]).chain(
-            self.chain.local[piece.first..=piece.last]
-                .iter()
-                .map(|l| l[1]),
-        )
+        self.chain.piece_nodes(piece)
     }
 
     /// Gives a laid piece its floor contact: one segment per link. While the coil rolls a
