@@ -7,11 +7,12 @@
 # Prints each one's median and range. The machine's other load changes every figure: run it
 # on a quiet machine and quote the ratios, which it changes least.
 # Usage: tools/overhead.sh [N] [M]   (default 15 3; needs a release build: cargo build --release)
+# UNCOIL=path/to/uncoil measures another build (an earlier release, say) the same way.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 n=${1:-15}
 m=${2:-3}
-bin=target/release/uncoil
+bin=${UNCOIL:-target/release/uncoil}
 [ -x "$bin" ] || cargo build --release
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT

@@ -234,7 +234,8 @@ impl ExactGeometry {
     /// The spiral parameter of the lowest point at laid fraction `f`, by bisection to the last
     /// bit (it stops once the midpoint is one of the ends). The references differentiate in
     /// `psi` and tabulate the moments in panels, so a last-bit change of `psi` can move a
-    /// force by 1e-6 of itself: the bisection is kept, bit for bit, and only guided. Newton's
+    /// force far more than its own rounding: the bisection is kept, bit for bit, and only
+    /// guided. Newton's
     /// method ([`SpiralMoments::psi_at_length`]) finds the root first; a midpoint farther
     /// from it than the margin falls on the side the root says without evaluating the arc,
     /// so some fifteen evaluations replace sixty. The margin is 1e-11 of `psi`, and never
