@@ -36,6 +36,7 @@ use crate::spiral::{Placed, Spiral, SpiralMoments, rotate};
 
 mod bang;
 mod build;
+
 pub mod folded;
 mod impulses;
 mod observe;
@@ -370,7 +371,7 @@ impl Model {
         self.t += dt;
         self.last_dt = dt;
         // The floor's contact impulses of the step, read once for the forces and the ledger.
-        let contacts: Vec<work::FloorImpulse> =
+        let contacts: Vec<(RigidBodyHandle, work::FloorImpulse)> =
             work::floor_impulses(&self.world.narrow_phase, &self.world.colliders, self.floor)
                 .collect();
         self.accounts.impulses = self.step_impulses(&moving, &contacts, dt);

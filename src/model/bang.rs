@@ -150,7 +150,7 @@ impl Model {
     pub(super) fn book_bang_step(
         &mut self,
         before: &[BodyState],
-        contacts: &[work::FloorImpulse],
+        contacts: &[(RigidBodyHandle, work::FloorImpulse)],
         lost_j: f64,
         kinetic: f64,
         dt: f64,
@@ -169,8 +169,8 @@ impl Model {
         );
         let floor: Vec<_> = contacts
             .iter()
-            .filter_map(|&c| {
-                let k = self.world.bodies.get(c.body)?.user_data as usize;
+            .filter_map(|&(body, c)| {
+                let k = self.world.bodies.get(body)?.user_data as usize;
                 let i = self.chain.free.binary_search_by_key(&k, |p| p.first).ok()?;
                 Some((i, c))
             })

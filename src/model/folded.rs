@@ -163,7 +163,7 @@ impl FoldedModel {
         let contacts: Vec<(usize, FloorImpulse)> = match self.floor {
             None => Vec::new(),
             Some(floor) => floor_impulses(&self.world.narrow_phase, &self.world.colliders, floor)
-                .filter_map(|c| Some((self.world.bodies.get(c.body)?.user_data as usize, c)))
+                .filter_map(|(body, c)| Some((self.world.bodies.get(body)?.user_data as usize, c)))
                 .collect(),
         };
         let moved = moved(&self.world.bodies, self.links.iter().copied(), &before);
@@ -173,7 +173,7 @@ impl FoldedModel {
         let (_, m, _) = self.link;
         let dp: f64 = moved
             .iter()
-            .map(|b| m * (b.body.linvel().y - b.before.linvel.y))
+            .map(|b| m * (b.after.linvel.y - b.before.linvel.y))
             .sum();
         let floor_up: f64 = contacts
             .iter()

@@ -211,19 +211,19 @@ impl Model {
     pub(super) fn step_impulses(
         &self,
         before: &MovingSnapshot,
-        contacts: &[work::FloorImpulse],
+        contacts: &[(RigidBodyHandle, work::FloorImpulse)],
         dt: f64,
     ) -> StepImpulses {
         let mut out = StepImpulses::default();
         let o = self.origin();
         let moving = &before.bodies;
         let mut floor_angular = 0.0;
-        for c in contacts {
+        for &(body, c) in contacts {
             let f = c.normal + c.friction;
             out.floor_on_moving[0] += f.x;
             out.floor_on_moving[1] += f.y;
-            if Some(c.body) == self.coil.body
-                && let Some(i) = moving.iter().position(|&h| h == c.body)
+            if Some(body) == self.coil.body
+                && let Some(i) = moving.iter().position(|&h| h == body)
             {
                 out.floor_on_coil[0] += f.x;
                 out.floor_on_coil[1] += f.y;

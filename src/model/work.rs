@@ -88,19 +88,19 @@ impl BodyState {
 /// body's centre of mass). Up and +x positive.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct FloorImpulse {
-    pub body: RigidBodyHandle,
     pub normal: Vector,
     pub friction: Vector,
     pub arm: Vector,
 }
 
 /// The floor's impulses on everything touching it during the last step (summed over the
-/// engine's substeps). The sign convention is pinned by the resting- and sliding-box tests.
+/// engine's substeps), each beside the body it acts on. The sign convention is pinned by the
+/// resting- and sliding-box tests.
 pub(super) fn floor_impulses(
     narrow_phase: &NarrowPhase,
     colliders: &ColliderSet,
     floor: ColliderHandle,
-) -> impl Iterator<Item = FloorImpulse> {
+) -> impl Iterator<Item = (RigidBodyHandle, FloorImpulse)> {
     narrow_phase
         .contact_pairs_with(floor)
         .flat_map(move |pair| {
@@ -128,41 +128,46 @@ pub(super) fn floor_impulses(
                         continue;
                     };
                     let data = &point.data;
-                    out.push(FloorImpulse {
+                    out.push((
                         body,
-                        normal: n * (sign * data.impulse),
-                        friction: t * (-sign * data.tangent_impulse.x),
-                        arm: if floor_first {
-                            data.solver_dp2
-                        } else {
-                            data.solver_dp1
+                        FloorImpulse {
+                            normal: n * (sign * data.impulse),
+                            friction: t * (-sign * data.tangent_impulse.x),
+                            arm: if floor_first {
+                                data.solver_dp2
+                            } else {
+                                data.solver_dp1
+                            },
                         },
-                    });
+                    ));
                 }
             }
             out
         })
 }
 
-/// A body of the tape as the work split sees it: its state before the step, and itself
-/// after it.
-pub(super) struct Moved<'a> {
-    pub body: &'a RigidBody,
+/// A body of the tape as the work split sees it: its mass, and its motion before and
+/// after the step.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Moved {
+    pub mass: f64,
     pub before: BodyState,
+    pub after: BodyState,
 }
 
 /// The bodies `handles` of `set` as the work split sees them, each beside its state
 /// `before` the step (in the same order).
-pub(super) fn moved<'a>(
-    set: &'a RigidBodySet,
+pub(super) fn moved(
+    set: &RigidBodySet,
     handles: impl Iterator<Item = RigidBodyHandle>,
     before: &[BodyState],
-) -> Vec<Moved<'a>> {
+) -> Vec<Moved> {
     handles
         .zip(before)
         .map(|(h, &before)| Moved {
-            body: &set[h],
+            mass: set[h].mass(),
             before,
+            after: BodyState::of(&set[h]),
         })
         .collect()
 }
@@ -179,7 +184,7 @@ pub(super) struct StepWork {
 /// The work of one step on `bodies`; `floor` are the floor's impulses of the step, by index
 /// into `bodies`.
 pub(super) fn step_work(
-    bodies: &[Moved<'_>],
+    bodies: &[Moved],
     floor: &[(usize, FloorImpulse)],
     gravity: Vector,
     dt: f64,
@@ -188,7 +193,7 @@ pub(super) fn step_work(
     let mut floor_w = vec![0.0; bodies.len()];
     for &(i, c) in floor {
         let m = &bodies[i];
-        let u = 0.5 * (m.before.velocity_at(c.arm) + BodyState::of(m.body).velocity_at(c.arm));
+        let u = 0.5 * (m.before.velocity_at(c.arm) + m.after.velocity_at(c.arm));
         normal_w += c.normal.dot(u);
         friction_w += c.friction.dot(u);
         floor_w[i] += (c.normal + c.friction).dot(u);
@@ -199,10 +204,8 @@ pub(super) fn step_work(
         .iter()
         .zip(&floor_w)
         .map(|(m, &floor)| {
-            let body = m.body;
-            let gravity_w =
-                (gravity * (body.mass() * dt)).dot(0.5 * (m.before.linvel + body.linvel()));
-            body.kinetic_energy() - m.before.kinetic_j - gravity_w - floor
+            let gravity_w = (gravity * (m.mass * dt)).dot(0.5 * (m.before.linvel + m.after.linvel));
+            m.after.kinetic_j - m.before.kinetic_j - gravity_w - floor
         })
         .sum();
     StepWork {
