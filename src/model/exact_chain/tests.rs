@@ -1,0 +1,246 @@
+//! The exact chain against what is known without it: a free chain keeps its momentum,
+//! angular momentum and energy; a pendulum's energy error is of second order in the step;
+//! the joints stay closed; on the floor a chain carries its weight, and slides to rest under
+//! Coulomb's friction.
+
+use super::*;
+
+const TOLERANCE: Tolerance = Tolerance {
+    position_m: 1e-12,
+    max_iterations: 50,
+};
+
+/// A straight chain of `n` links of length `l` and mass `m` along +x from the origin, each
+/// a thin rod (inertia m l^2 / 12), at rest.
+fn straight(n: usize, l: f64, m: f64) -> (Vec<Body>, Vec<Joint>) {
+    let bodies = (0..n)
+        .map(|k| Body {
+            mass_kg: m,
+            inertia_kg_m2: m * l * l / 12.0,
+            position_m: [(k as f64 + 0.5) * l, 0.0],
+            angle_rad: 0.0,
+            velocity_m_s: [0.0, 0.0],
+            spin_rad_s: 0.0,
+        })
+        .collect();
+    let joints = (1..n)
+        .map(|_| Joint {
+            prev: [0.5 * l, 0.0],
+            next: [-0.5 * l, 0.0],
+        })
+        .collect();
+    (bodies, joints)
+}
+
+fn momentum(chain: &ExactChain) -> [f64; 3] {
+    let mut p = [0.0; 3];
+    for b in chain.bodies() {
+        let [u, w] = b.velocity_m_s;
+        let [x, y] = b.position_m;
+        p[0] += b.mass_kg * u;
+        p[1] += b.mass_kg * w;
+        p[2] += b.mass_kg * (x * w - y * u) + b.inertia_kg_m2 * b.spin_rad_s;
+    }
+    p
+}
+
+/// A chain of 20 links with a consistent velocity field: spinning as a whole about its
+/// centre, with a flexing wave on top, projected onto the joints by one step of length 0.
+fn spinning_and_flexing() -> ExactChain {
+    let (mut bodies, joints) = straight(20, 0.05, 0.01);
+    // Each link's angle and spin from a bend, positions from the joints.
+    let mut node = [0.0, 0.0];
+    for (k, b) in bodies.iter_mut().enumerate() {
+        let s = k as f64 / 20.0;
+        b.angle_rad = 0.6 * (std::f64::consts::PI * s).sin();
+        let half = rotate([0.025, 0.0], b.angle_rad);
+        b.position_m = [node[0] + half[0], node[1] + half[1]];
+        node = [node[0] + 2.0 * half[0], node[1] + 2.0 * half[1]];
+    }
+    // Rigid spin about the origin, plus each link's own flexing spin; the centres'
+    // velocities follow from the joints, node by node.
+    let mut node_v = [0.0, 0.0];
+    for (k, b) in bodies.iter_mut().enumerate() {
+        b.spin_rad_s = 3.0 + 40.0 * (k as f64 * 0.7).cos();
+        let half = rotate([0.025, 0.0], b.angle_rad);
+        b.velocity_m_s = [
+            node_v[0] - b.spin_rad_s * half[1],
+            node_v[1] + b.spin_rad_s * half[0],
+        ];
+        node_v = [
+            node_v[0] - 2.0 * b.spin_rad_s * half[1],
+            node_v[1] + 2.0 * b.spin_rad_s * half[0],
+        ];
+    }
+    ExactChain::new(bodies, joints, None, TOLERANCE)
+}
+
+#[test]
+fn a_free_chain_keeps_its_momentum_its_angular_momentum_and_its_energy() {
+    for h in [1e-4, 5e-5] {
+        let mut chain = spinning_and_flexing();
+        let (p0, e0) = (momentum(&chain), chain.kinetic_j());
+        let mut worst: [f64; 2] = [0.0; 2];
+        let mut fastest: f64 = 0.0;
+        for _ in 0..(0.2 / h) as usize {
+            let report = chain.step(h, [0.0, 0.0]).expect("solves");
+            assert!(report.converged, "{report:?}");
+            assert!(chain.joint_gap_m() < 1e-11, "gap {}", chain.joint_gap_m());
+            let p = momentum(&chain);
+            worst[0] = worst[0].max((p[2] - p0[2]).abs() / p0[2].abs());
+            worst[1] = worst[1].max((chain.kinetic_j() / e0 - 1.0).abs());
+            assert!((p[0] - p0[0]).abs() + (p[1] - p0[1]).abs() < 1e-12);
+            let spin = chain.bodies().iter().map(|b| b.spin_rad_s.abs());
+            fastest = fastest.max(spin.fold(0.0, f64::max));
+        }
+        println!(
+            "h = {h:e} s (at most {:.3} rad a step): angular momentum {:.1e}, energy {:.1e}",
+            fastest * h,
+            worst[0],
+            worst[1]
+        );
+        assert!(
+            worst[0] < 1e-10,
+            "angular momentum drifted by {:e}",
+            worst[0]
+        );
+        assert!(worst[1] < 1e-4, "energy drifted by {:e}", worst[1]);
+    }
+}
+
+/// A chain of 8 links pinned at one end, released horizontal under gravity: returns the
+/// largest error of its energy over 0.5 s, relative to the most kinetic energy it had. The
+/// step's velocity is the motion's over the step (the positions move by it), so the energy
+/// at a step's end is read with the mean of the velocities of the steps either side.
+fn pendulum_energy_error(h: f64) -> f64 {
+    let (bodies, joints) = straight(8, 0.05, 0.01);
+    let pin = Pin {
+        anchor: [-0.025, 0.0],
+        at_m: [0.0, 0.0],
+    };
+    let mut chain = ExactChain::new(bodies, joints, Some(pin), TOLERANCE);
+    let g = 9.81;
+    let potential = |c: &ExactChain| {
+        c.bodies()
+            .iter()
+            .map(|b| b.mass_kg * g * b.position_m[1])
+            .sum::<f64>()
+    };
+    let e0 = potential(&chain);
+    let (mut worst, mut most) = (0.0_f64, 0.0_f64);
+    for _ in 0..(0.5 / h).round() as usize {
+        let (before, p) = (chain.bodies().to_vec(), potential(&chain));
+        let report = chain.step(h, [0.0, -g]).expect("solves");
+        assert!(report.converged && report.joint_gap_m < 1e-11, "{report:?}");
+        let kinetic: f64 = before
+            .iter()
+            .zip(chain.bodies())
+            .map(|(a, b)| {
+                let mut mean = *b;
+                mean.velocity_m_s = [
+                    0.5 * (a.velocity_m_s[0] + b.velocity_m_s[0]),
+                    0.5 * (a.velocity_m_s[1] + b.velocity_m_s[1]),
+                ];
+                mean.spin_rad_s = 0.5 * (a.spin_rad_s + b.spin_rad_s);
+                mean.kinetic_j()
+            })
+            .sum();
+        worst = worst.max((kinetic + p - e0).abs());
+        most = most.max(kinetic);
+    }
+    worst / most
+}
+
+#[test]
+fn a_pinned_chain_s_energy_error_is_of_second_order_in_the_step() {
+    let coarse = pendulum_energy_error(4e-4);
+    let fine = pendulum_energy_error(2e-4);
+    let order = (coarse / fine).log2();
+    println!("energy error {coarse:.2e} at 4e-4 s, {fine:.2e} at 2e-4 s: order {order:.2}");
+    assert!(coarse < 1e-2, "{coarse:e}");
+    assert!((1.7..2.5).contains(&order), "order {order:.2}");
+}
+
+fn level_floor(friction: f64) -> Floor {
+    Floor {
+        point_m: [0.0, 0.0],
+        normal: [0.0, 1.0],
+        friction,
+    }
+}
+
+/// Every node of a straight chain, each belonging to one link: the first link has both ends,
+/// every other its far end.
+fn nodes(n: usize, l: f64) -> Vec<Vec<[f64; 2]>> {
+    (0..n)
+        .map(|k| {
+            if k == 0 {
+                vec![[-0.5 * l, 0.0], [0.5 * l, 0.0]]
+            } else {
+                vec![[0.5 * l, 0.0]]
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn a_chain_lying_on_the_floor_carries_its_weight_and_stays() {
+    let (bodies, joints) = straight(10, 0.01, 0.001);
+    let mut chain = ExactChain::new(bodies, joints, None, TOLERANCE);
+    chain.set_floor(level_floor(0.5), &nodes(10, 0.01));
+    let (h, g) = (1e-4, 9.81);
+    for _ in 0..100 {
+        let report = chain.step(h, [0.0, -g]).expect("solves");
+        assert!(report.converged, "{report:?}");
+        let up: f64 = chain.contacts().iter().map(|c| c.normal_n_s[1]).sum();
+        let weight = 10.0 * 0.001 * g * h;
+        assert!(
+            (up / weight - 1.0).abs() < 1e-6,
+            "{up:e} against {weight:e}"
+        );
+    }
+    for b in chain.bodies() {
+        assert!(
+            b.position_m[1].abs() < 1e-12 && b.velocity_m_s[1].abs() < 1e-9,
+            "{b:?}"
+        );
+    }
+}
+
+#[test]
+fn a_chain_sliding_on_the_floor_stops_as_coulomb_says() {
+    // Ten links sliding at 0.5 m/s with friction 0.5: they decelerate at mu g and stop
+    // after u / (mu g), their kinetic energy all taken by friction.
+    let (mut bodies, joints) = straight(10, 0.01, 0.001);
+    for b in &mut bodies {
+        b.velocity_m_s = [0.5, 0.0];
+    }
+    let mut chain = ExactChain::new(bodies, joints, None, TOLERANCE);
+    chain.set_floor(level_floor(0.5), &nodes(10, 0.01));
+    let (h, g) = (1e-4, 9.81);
+    let e0 = chain.kinetic_j();
+    let (mut friction_w, mut t) = (0.0, 0.0);
+    while chain.bodies()[0].velocity_m_s[0] > 1e-9 && t < 1.0 {
+        let before: Vec<Body> = chain.bodies().to_vec();
+        let report = chain.step(h, [0.0, -g]).expect("solves");
+        assert!(report.converged, "{report:?}");
+        for c in chain.contacts() {
+            let (b0, b1) = (before[c.body], chain.bodies()[c.body]);
+            let (u0, u1) = (b0.velocity_at(c.arm_m), b1.velocity_at(c.arm_m));
+            friction_w += dot(
+                c.friction_n_s,
+                [0.5 * (u0[0] + u1[0]), 0.5 * (u0[1] + u1[1])],
+            );
+        }
+        t += h;
+    }
+    let stop = 0.5 / (0.5 * g);
+    assert!(
+        (t - stop).abs() < 2.0 * h,
+        "stopped at {t} s, Coulomb says {stop} s"
+    );
+    assert!(
+        (friction_w / -e0 - 1.0).abs() < 1e-6,
+        "friction took {friction_w:e} of {e0:e}"
+    );
+}
