@@ -216,7 +216,7 @@ fn run_chain_command(chain: &FoldedChain, out: Option<PathBuf>, view: &View) -> 
             println!("Wrote {0}/samples.csv and {0}/report.json", dir.display());
             match report.end {
                 ChainEnd::Interrupted => Exit::Interrupted.into(),
-                ChainEnd::NotFinite => Exit::Stopped.into(),
+                ChainEnd::NotFinite | ChainEnd::Unsolved => Exit::Stopped.into(),
                 _ => Exit::Ok.into(),
             }
         }

@@ -31,11 +31,12 @@ use std::f64::consts::PI;
 use rapier2d_f64::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::scene::Scene;
+use crate::scene::{BangEngine, Scene};
 use crate::spiral::{Placed, Spiral, SpiralMoments, rotate};
 
 mod bang;
 mod build;
+pub mod exact_chain;
 
 pub mod folded;
 mod impulses;
@@ -79,6 +80,8 @@ pub struct BangRecord {
     pub ledger: BangLedger,
     /// What ended the bang, once it has ended.
     pub end: Option<BangEnd>,
+    /// How the exact chain solved the bang's steps (all zero on the engine's).
+    pub solve: exact_chain::SolveStats,
 }
 
 use work::BodyState;
@@ -174,6 +177,8 @@ pub struct Health {
     pub max_spin_rad_s: f64,
     /// Every moving body's position and velocity are finite.
     pub finite: bool,
+    /// The exact chain's solve failed, and why (the step was not taken).
+    pub unsolved: Option<exact_chain::StepError>,
 }
 
 /// In the bang a piece is pinned this fraction of R above the floor's contact plane (the
@@ -197,6 +202,8 @@ pub struct Model {
     accounts: Accounts,
     /// The final bang's record.
     bang: BangRecord,
+    /// The bang's exact chain, once it steps the bang.
+    exact: Option<bang::exact::ExactBang>,
     ground: RigidBodyHandle,
     floor: ColliderHandle,
     phase: Phase,
@@ -254,6 +261,7 @@ impl Model {
                 bang_fraction,
                 bang_iterations: scene.solver.bang_iterations as usize,
                 bang_relax_iterations: scene.solver.bang_relax_iterations as usize,
+                bang_engine: scene.solver.bang_engine,
                 bang_cap_s: scene.stop.bang_cap_s,
                 rest_fraction: scene.stop.rest_fraction,
                 total_mass: tape.mass_kg,
@@ -274,6 +282,7 @@ impl Model {
             chain: Chain::wound(links),
             accounts: Accounts::default(),
             bang: BangRecord::default(),
+            exact: None,
             ground,
             floor,
             phase: Phase::Rolling,
@@ -367,13 +376,16 @@ impl Model {
             Vec::new()
         };
         let moving = self.snapshot();
-        self.world.step();
+        // The floor's contact impulses of the step, read once for the forces and the ledger.
+        let contacts: Vec<(RigidBodyHandle, work::FloorImpulse)> = if self.on_exact_chain() {
+            self.step_exact(dt)
+        } else {
+            self.world.step();
+            work::floor_impulses(&self.world.narrow_phase, &self.world.colliders, self.floor)
+                .collect()
+        };
         self.t += dt;
         self.last_dt = dt;
-        // The floor's contact impulses of the step, read once for the forces and the ledger.
-        let contacts: Vec<(RigidBodyHandle, work::FloorImpulse)> =
-            work::floor_impulses(&self.world.narrow_phase, &self.world.colliders, self.floor)
-                .collect();
         self.accounts.impulses = self.step_impulses(&moving, &contacts, dt);
         self.accounts.moved_angular_momentum = self.moved_angular_momentum(&moving, dt);
         let (kinetic, potential) = self.energy();
@@ -411,6 +423,11 @@ impl Model {
             self.end_bang(BangEnd::Cap);
         }
         self.observe()
+    }
+
+    /// Whether the exact chain steps the model now: in the bang, if the scene says so.
+    fn on_exact_chain(&self) -> bool {
+        self.phase == Phase::Bang && self.settings.bang_engine == BangEngine::Exact
     }
 
     fn near_node_psi(&self, k: usize) -> f64 {

@@ -122,6 +122,23 @@ pub struct Solver {
     /// docs/final-bang.md). While rolling, a joint that stiff pushes energy in (see
     /// `joint_hz`); in the bang the step follows the spin and it does not.
     pub bang_joint_hz: f64,
+    /// What solves the final bang (default: `"rapier"`).
+    pub bang_engine: BangEngine,
+}
+
+/// What solves the final bang (`solver.bang_engine`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BangEngine {
+    /// `"exact"`: the exact chain (`model::exact_chain`): the pieces' joints solved
+    /// directly at every step, in time linear in the pieces, and the floor's contacts to a
+    /// stated tolerance; one solve a step (`bang_iterations`, `bang_relax_iterations` and
+    /// `bang_joint_hz` are the engine's and do not apply).
+    Exact,
+    /// `"rapier"`: the engine's impulse joints, solved by Gauss-Seidel sweeps with the
+    /// contacts (`bang_iterations` substeps, `bang_relax_iterations` relax sweeps): the
+    /// cross-check.
+    Rapier,
 }
 
 /// When the simulation ends.

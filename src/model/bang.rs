@@ -4,6 +4,8 @@
 
 use super::*;
 
+pub(super) mod exact;
+
 impl Model {
     /// Joins the moving links, in order along the tape, into rigid pieces at least
     /// `bang_piece_m` long (a short remainder joins the last piece). Each piece moves with
@@ -175,7 +177,12 @@ impl Model {
                 Some((i, c))
             })
             .collect();
-        let work = work::step_work(&bodies, &floor, self.world.gravity, dt);
+        let gravity_work = self
+            .exact
+            .as_ref()
+            .filter(|_| self.on_exact_chain())
+            .map(|e| e.gravity_work_j);
+        let work = work::step_work(&bodies, &floor, self.world.gravity, dt, gravity_work);
         let impulse: f64 = floor.iter().map(|(_, c)| c.normal.length()).sum();
         // Potential energy above lying flat on the floor: the weight across the floor times
         // the centre of mass's height above where it would lie (never negative: on a fixed

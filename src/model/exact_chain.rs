@@ -1,50 +1,57 @@
 //! The exact chain: rigid bodies in a row joined end to end by revolute joints, the first
-//! optionally pinned to the world, on an optional frictional floor. Each step solves the
-//! joints exactly and the floor's contacts to a stated tolerance, in time linear in the
-//! number of bodies. Pure `f64`: it uses no engine, and knows nothing of coils or ledgers.
+//! optionally pinned to the world, on an optional frictional floor. Each step holds the
+//! joints exactly, by a direct solve in time linear in the number of bodies, and the
+//! floor's contacts to a stated tolerance. Pure `f64`: it uses no engine, and knows nothing
+//! of coils or ledgers.
 //!
 //! Each body has maximal coordinates `q = (x, y, theta)` about its centre of mass and a
 //! constant diagonal mass matrix `M = diag(m, m, I)`: in the plane the configuration space is
-//! flat, so the chain's equations are those of particles with holonomic constraints, and
-//! the step is SHAKE's (Ryckaert, Ciccotti & Berendsen 1977), symplectic and second order:
+//! flat, and the chain is a holonomically constrained system whose standard integrator is
+//! RATTLE (Andersen 1983; Hairer, Lubich and Wanner, Geometric Numerical Integration, VII.1):
+//! symplectic, second order, its energy error bounded rather than drifting. A step of length
+//! `h`, the velocity `v` held at whole steps (where `G(q) v = 0`: every joint's two anchors
+//! move together):
 //!
 //! ```text
-//! v+ = v + h g + M^-1 (G(q)^T lambda + C(q)^T p)      impulses along the start's normals
-//! q+ = q + h v+                                         (theta+ = theta + h omega+)
-//! g(q+) = 0                                             every joint closed at the step's end
+//! 1. floor's impulses at q:  v' = v + M^-1 (G^T mu + C^T p),     G(q) v' = 0
+//! 2. half kick and drift:    v~ = v' + h g / 2 + M^-1 G(q)^T lambda,
+//!                            q+ = q + h v~,                       g(q+) = 0  (SHAKE)
+//! 3. half kick, impulses:    v+ = v~ + h g / 2 + M^-1 (G(q+)^T nu + C(q+)^T p+),
+//!                            G(q+) v+ = 0
 //! ```
 //!
 //! `g` is every joint's gap (the two anchors' world points, 2 rows each; the pin's anchor
-//! and its world point, 2 rows). The joints' impulses act along the start's Jacobian `G(q)`
-//! and close the gaps at the end's, so their work over a smooth motion is of second order in
-//! the step and does not accumulate; an exact step of a free chain keeps its momentum and
-//! angular momentum to the solve's tolerance. The floor's contacts are inelastic, with
-//! Coulomb friction: a contact point (a body's vertex within reach of the floor) either
-//! leaves (`p = 0`), or ends the step on the floor (its predicted gap zero, `p_n >= 0`) and
-//! sticks (`u_t+ = 0`, `|p_t| <= mu p_n`) or slides (`p_t = -mu p_n sign(u_t+)`), the
-//! tangential velocity `u_t+` taken at the start's pose, the one its impulse acts at.
+//! and its world point, 2 rows) and `G` its Jacobian. The drift closes every joint at the
+//! step's end by Newton's method; stages 1 and 3 hold the joints at a whole step, so an
+//! impact there does no work on them however it changes the bodies' spins (an impulse in the
+//! drift would: its joints close over the step with the spins of after the impact). The
+//! floor's contacts act in stages 1 and 3: inelastic, with Coulomb friction, each point's
+//! normal velocity at least its target (stage 1: closing its gap over the step and meeting
+//! gravity's half kick; stage 3: not approaching), solved by projected Gauss-Seidel against
+//! the chain's exact response (`solve/delassus.rs`, Baraff 1996, section 8). A contact point
+//! the drift takes below the floor (it moves on an arc, not on its velocity's line) is moved
+//! out by position, with the joints kept closed. Each impulse's work is measured over its
+//! own stage ([`ContactImpulse::work_j`], [`StepReport::gravity_work_j`]).
 //!
-//! The nonlinear system is solved by Newton's method on the joints' and contacts' gaps,
-//! with the contacts' modes (off, stick, slide) chosen anew at each iteration: a direct
-//! solve of a block-tridiagonal system each time ([`blocks`]), whose block `i` holds body
-//! `i`'s contact rows and the joint to body `i + 1`. A contact touches one body and a joint
-//! two neighbours, so the system stays banded whatever the contacts. Redundant contacts (a
-//! straight chain sticking on the floor at every node) make it singular; each contact row
-//! carries a compliance of [`REGULARISATION`] times its own inverse effective mass, far
-//! below the tolerance. The step ends when the modes no longer change and every gap is
-//! within the tolerance; a step that reaches the iteration cap first is reported as missed.
+//! Each solve is the direct solve of a block-tridiagonal system (`blocks.rs`) whose block `i`
+//! holds the pin's rows (body 0) and the joint to body `i + 1`: a joint touches two
+//! neighbours, so the system is banded. A step whose drift would turn a body by more than
+//! [`Tolerance::max_turn_rad`] (an impact at its start can spin a piece far faster than the
+//! step was chosen for), or whose solve fails, is taken again as two halves.
 //!
 //! References: D. Baraff, "Linear-time dynamics using Lagrange multipliers", SIGGRAPH 1996
-//! (the block-tridiagonal solve of a loop-free chain); J.-P. Ryckaert, G. Ciccotti and H. J.
-//! C. Berendsen, J. Comput. Phys. 23, 327 (1977) (SHAKE).
+//! (the block-tridiagonal solve of a loop-free chain, contacts as auxiliary constraints); H.
+//! C. Andersen, "Rattle: a velocity version of the Shake algorithm", J. Comput. Phys. 52, 24
+//! (1983); J.-P. Ryckaert, G. Ciccotti and H. J. C. Berendsen, J. Comput. Phys. 23, 327
+//! (1977) (SHAKE).
 
 mod blocks;
 
 use blocks::BlockTridiag;
 
-/// A contact row's compliance, relative to its own inverse effective mass: it keeps the
-/// system regular when contacts are redundant, and moves a contact's velocity by this
-/// fraction of its impulse's effect.
+/// The compliance of a point moved out of the floor, relative to its own inverse effective
+/// mass: it keeps the position projection's system regular when such points are redundant
+/// (two ends of a link flat on the floor and a joint between them).
 pub const REGULARISATION: f64 = 1e-9;
 
 /// A rigid body of the chain, about its centre of mass.
@@ -145,6 +152,8 @@ pub struct Tolerance {
     pub position_m: f64,
     /// The most Newton iterations a step may take.
     pub max_iterations: u32,
+    /// The largest angle a body may turn in a step's drift before the step is halved (rad).
+    pub max_turn_rad: f64,
 }
 
 /// The floor's impulse on one body during a step, where it acted.
@@ -160,6 +169,10 @@ pub struct ContactImpulse {
     pub friction_n_s: [f64; 2],
     /// From the body's centre of mass to the contact point, at the step's start (m).
     pub arm_m: [f64; 2],
+    /// The work of the normal and the friction impulse, each times the mean velocity of the
+    /// point it acted on over the impulses at the step's start (J; negative: taken from the
+    /// chain).
+    pub work_j: [f64; 2],
 }
 
 /// How a step was solved.
@@ -173,6 +186,72 @@ pub struct StepReport {
     pub joint_gap_m: f64,
     /// The deepest a contact point ended below the floor (m; 0 if none).
     pub penetration_m: f64,
+    /// Gravity's work over the step, each half kick's impulse times the mean velocity over
+    /// it (J).
+    pub gravity_work_j: f64,
+    /// The largest angle a body turned in the drift (rad).
+    pub max_turn_rad: f64,
+    /// The pieces the step was taken in: 1, or more where it was halved.
+    pub pieces: u32,
+}
+
+/// How a run's steps were solved, summed step by step.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SolveStats {
+    /// Steps solved.
+    pub steps: u64,
+    /// Newton iterations over all steps (each one direct solve).
+    pub iterations: u64,
+    /// The most iterations one step took.
+    pub max_iterations: u32,
+    /// Steps that reached the iteration cap before the tolerance.
+    pub missed_steps: u64,
+    /// Extra pieces steps were halved into (0 if none was).
+    #[serde(default)]
+    pub halvings: u64,
+    /// The widest joint gap any step left (m).
+    pub max_joint_gap_m: f64,
+    /// The deepest any contact point ended below the floor (m).
+    pub max_penetration_m: f64,
+}
+
+impl SolveStats {
+    /// Adds one step's report.
+    pub fn add(&mut self, r: &StepReport) {
+        self.steps += 1;
+        self.iterations += u64::from(r.iterations);
+        self.max_iterations = self.max_iterations.max(r.iterations);
+        self.missed_steps += u64::from(!r.converged);
+        self.halvings += u64::from(r.pieces.saturating_sub(1));
+        self.max_joint_gap_m = self.max_joint_gap_m.max(r.joint_gap_m);
+        self.max_penetration_m = self.max_penetration_m.max(r.penetration_m);
+    }
+
+    /// Iterations per step, on average.
+    pub fn mean_iterations(&self) -> f64 {
+        if self.steps == 0 {
+            0.0
+        } else {
+            self.iterations as f64 / self.steps as f64
+        }
+    }
+}
+
+/// The largest turn of a body in one step's drift before the step is halved (rad): twice
+/// the final bang's default step rule (`solver.bang_step_rad`, 0.15 rad), room for an
+/// impact's spin-up.
+pub const DEFAULT_MAX_TURN_RAD: f64 = 0.3;
+
+/// The tolerance a chain of pieces `length_m` long is solved to: joints closed, and contact
+/// points on the floor, within 1e-9 of that length (never finer than the coordinates'
+/// rounding allows, see [`ExactChain::step`]), in at most 50 iterations, no body turning by
+/// more than [`DEFAULT_MAX_TURN_RAD`] in a step.
+pub fn tolerance_for(length_m: f64) -> Tolerance {
+    Tolerance {
+        position_m: 1e-9 * length_m,
+        max_iterations: 50,
+        max_turn_rad: DEFAULT_MAX_TURN_RAD,
+    }
 }
 
 /// Why a step could not be taken. The chain is left as it was before the step.
@@ -189,17 +268,6 @@ pub enum StepError {
     NonFinite,
 }
 
-/// A contact point's state in the solve.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Mode {
-    Off,
-    /// On the floor, frictionless.
-    Normal,
-    Stick,
-    /// Sliding in direction `+1` or `-1` along the floor's tangent.
-    Slide(f64),
-}
-
 mod solve;
 
 /// The chain, its joints, its pin and its floor.
@@ -214,9 +282,12 @@ pub struct ExactChain {
     vertex_at: Vec<usize>,
     floor: Option<Floor>,
     tolerance: Tolerance,
-    /// Each vertex's mode at the end of the last step: the next step's first guess.
-    modes: Vec<Mode>,
+    /// Each vertex's normal and friction impulse in the last stage: the next one's first
+    /// guess.
+    warm: Vec<[f64; 2]>,
     contacts: Vec<ContactImpulse>,
+    /// No step taken yet: the pin, if any, is new (see `solve/rows.rs`).
+    fresh: bool,
     scratch: solve::Scratch,
     system: BlockTridiag,
 }
@@ -247,8 +318,9 @@ impl ExactChain {
             vertex_at,
             floor: None,
             tolerance,
-            modes: Vec::new(),
+            warm: Vec::new(),
             contacts: Vec::new(),
+            fresh: true,
             scratch: solve::Scratch::default(),
             system: BlockTridiag::default(),
         }
@@ -269,7 +341,7 @@ impl ExactChain {
             self.vertices.extend_from_slice(p);
         }
         self.vertex_at.push(self.vertices.len());
-        self.modes = vec![Mode::Off; self.vertices.len()];
+        self.warm = vec![[0.0; 2]; self.vertices.len()];
     }
 
     /// The bodies.
@@ -302,6 +374,12 @@ impl ExactChain {
         &self.contacts
     }
 
+    /// The position tolerance a step is solved to now: the chain's, or 4096 roundings of its
+    /// largest coordinate if that is wider (m).
+    pub fn position_tolerance_m(&self) -> f64 {
+        solve::position_tolerance(self)
+    }
+
     /// Kinetic energy (J).
     pub fn kinetic_j(&self) -> f64 {
         self.bodies.iter().map(Body::kinetic_j).sum()
@@ -325,9 +403,52 @@ impl ExactChain {
     }
 
     /// Advances the chain by `h` (s) under `gravity` (m/s^2). On an error the chain is left
-    /// as it was.
+    /// as it was. The tolerance is never taken finer than 4096 roundings of the largest
+    /// coordinate (9e-13 of it), which Newton's method could not reach.
+    ///
+    /// A step whose drift does not close the joints within the iteration cap, turns a body
+    /// by more than [`Tolerance::max_turn_rad`] (an impact at its start can spin a piece far
+    /// faster than the step was chosen for), or fails, is taken again as two halves, down to
+    /// 1/1024 of it; the report sums the halves.
     pub fn step(&mut self, h: f64, gravity: [f64; 2]) -> Result<StepReport, StepError> {
-        solve::step(self, h, gravity)
+        self.step_within(h, gravity, 0)
+    }
+
+    fn step_within(
+        &mut self,
+        h: f64,
+        gravity: [f64; 2],
+        depth: u32,
+    ) -> Result<StepReport, StepError> {
+        const MAX_DEPTH: u32 = 10;
+        let (bodies, warm) = (self.bodies.clone(), self.warm.clone());
+        let result = solve::step(self, h, gravity);
+        let fits = |r: &StepReport| r.converged && r.max_turn_rad <= self.tolerance.max_turn_rad;
+        match result {
+            Ok(report) if fits(&report) || depth >= MAX_DEPTH => {
+                self.fresh = false;
+                return Ok(report);
+            }
+            Err(e) if depth >= MAX_DEPTH => return Err(e),
+            _ => {}
+        }
+        self.bodies = bodies;
+        self.warm = warm;
+        let first = self.step_within(0.5 * h, gravity, depth + 1)?;
+        let contacts = std::mem::take(&mut self.contacts);
+        let second = self.step_within(0.5 * h, gravity, depth + 1)?;
+        let mut all = contacts;
+        all.append(&mut self.contacts);
+        self.contacts = all;
+        Ok(StepReport {
+            iterations: first.iterations + second.iterations,
+            converged: first.converged && second.converged,
+            joint_gap_m: first.joint_gap_m.max(second.joint_gap_m),
+            penetration_m: first.penetration_m.max(second.penetration_m),
+            gravity_work_j: first.gravity_work_j + second.gravity_work_j,
+            max_turn_rad: first.max_turn_rad.max(second.max_turn_rad),
+            pieces: first.pieces + second.pieces,
+        })
     }
 }
 

@@ -12,7 +12,8 @@
 use rapier2d_f64::prelude::*;
 
 use super::build::floor_builder;
-use super::work::{BodyState, FloorImpulse, floor_impulses, moved, step_work};
+use super::exact_chain::{self, Body, ExactChain, Floor, Joint, Pin, SolveStats, StepError};
+use super::work::{BodyState, FloorImpulse, Moved, floor_impulses, step_work};
 use super::{BangLedger, Model};
 use crate::scene::folded::{ChainJoints, FoldedChain};
 
@@ -36,111 +37,53 @@ pub struct ChainState {
     pub ledger: BangLedger,
 }
 
+/// What steps the chain: rapier's world (impulse or multibody joints), or the exact chain.
+enum Engine {
+    Rapier {
+        world: Box<PhysicsWorld>,
+        links: Vec<RigidBodyHandle>,
+        floor: Option<ColliderHandle>,
+    },
+    Exact(Box<ExactChain>),
+}
+
 /// The folded chain in the engine.
 pub struct FoldedModel {
-    world: PhysicsWorld,
-    links: Vec<RigidBodyHandle>,
-    floor: Option<ColliderHandle>,
+    engine: Engine,
     /// One link's length, mass and moment of inertia about its centre (m, kg, kg m^2).
     link: (f64, f64, f64),
+    dt: f64,
     pin_height_m: f64,
     g: f64,
     state: ChainState,
     potential0_j: f64,
+    solve: SolveStats,
 }
 
 impl FoldedModel {
     /// The chain of `scene` at rest in its fold.
     pub fn new(scene: &FoldedChain) -> Self {
         let c = &scene.chain;
-        let n = c.links as usize;
         let (l, m) = (c.link_m(), c.mass_kg / f64::from(c.links));
         let inertia = m * l * l / 12.0;
-        let mut world = PhysicsWorld::new();
-        world.gravity = Vector::new(0.0, -scene.gravity.g_m_s2);
-        let ip = &mut world.integration_parameters;
-        ip.dt = scene.solver.dt_s;
-        ip.num_solver_iterations = scene.solver.substeps as usize;
-        ip.num_internal_stabilization_iterations = scene.solver.relax_iterations as usize;
-        ip.length_unit = l;
-        ip.normalized_max_linear_velocity = Real::MAX;
-        let soft = SpringCoefficients::new(
-            scene.solver.contact_hz,
-            ip.static_contact_softness.damping_ratio,
-        );
-        ip.static_contact_softness = soft;
-        ip.contact_softness = soft;
-        let ground = world.insert_body(
-            RigidBodyBuilder::fixed().translation(Vector::new(0.0, scene.pin_height_m)),
-        );
-        let floor = scene.floor.enabled.then(|| {
-            world.insert_collider(
-                floor_builder(-scene.pin_height_m, scene.floor.friction),
-                Some(ground),
-            )
-        });
         let nodes = fold_nodes(scene);
-        let joint_soft = SpringCoefficients::new(
-            scene.solver.joint_hz,
-            SpringCoefficients::<Real>::joint_defaults().damping_ratio,
-        );
-        let (near, far) = (Vector::new(-0.5 * l, 0.0), Vector::new(0.5 * l, 0.0));
-        let mut links = Vec::with_capacity(n);
-        for k in 0..n {
-            let (a, b) = (nodes[k], nodes[k + 1]);
-            let body = world.insert_body(
-                RigidBodyBuilder::dynamic()
-                    .pose(Pose::new(0.5 * (a + b), (b - a).to_angle()))
-                    .additional_mass_properties(MassProperties::new(Vector::ZERO, m, inertia))
-                    .user_data(k as u128)
-                    .can_sleep(false),
-            );
-            if floor.is_some() {
-                world.insert_collider(
-                    ColliderBuilder::polyline(vec![near, far], None)
-                        .density(0.0)
-                        .friction(scene.floor.friction)
-                        .collision_groups(Model::tape_groups()),
-                    Some(body),
-                );
-            }
-            world.bodies[body].recompute_mass_properties_from_colliders(&world.colliders);
-            let (parent, anchor) = match links.last() {
-                None => (ground, Vector::ZERO),
-                Some(&prev) => (prev, far),
-            };
-            let joint = RevoluteJointBuilder::new()
-                .local_anchor1(anchor)
-                .local_anchor2(near)
-                .contacts_enabled(false)
-                .softness(joint_soft);
-            match scene.solver.joints {
-                ChainJoints::Impulse => {
-                    world.insert_impulse_joint(parent, body, joint);
-                }
-                ChainJoints::Multibody => {
-                    world
-                        .insert_multibody_joint(parent, body, joint)
-                        .expect("a chain has no loop");
-                }
-            }
-            links.push(body);
-        }
-        if scene.solver.joints == ChainJoints::Multibody {
-            fold_multibody(&mut world, &links, &nodes);
-        }
+        let engine = match scene.solver.joints {
+            ChainJoints::Exact => Engine::Exact(Box::new(exact_fold(scene, &nodes, m, inertia))),
+            _ => rapier_fold(scene, &nodes, m, inertia),
+        };
         let mut model = Self {
-            world,
-            links,
-            floor,
+            engine,
             link: (l, m, inertia),
+            dt: scene.solver.dt_s,
             pin_height_m: scene.pin_height_m,
             g: scene.gravity.g_m_s2,
             state: ChainState::default(),
             potential0_j: 0.0,
+            solve: SolveStats::default(),
         };
-        model.potential0_j = model.potential_j();
-        model.state = model.observe(0.0, 0.0);
+        let links = model.links();
+        model.potential0_j = model.potential_j(&links);
+        model.state = model.observe(&links, 0.0, 0.0);
         model
     }
 
@@ -149,28 +92,53 @@ impl FoldedModel {
         self.state
     }
 
-    /// Advances the chain by one engine step and books it.
-    pub fn step(&mut self) -> ChainState {
-        let dt = self.world.integration_parameters.dt;
-        let before: Vec<BodyState> = self
-            .links
-            .iter()
-            .map(|&h| BodyState::of(&self.world.bodies[h]))
-            .collect();
+    /// How the exact chain's steps were solved so far (all zero on rapier's joints).
+    pub fn solve_stats(&self) -> SolveStats {
+        self.solve
+    }
+
+    /// Advances the chain by one step and books it. On the exact chain's failure the chain
+    /// is left as it was.
+    pub fn step(&mut self) -> Result<ChainState, StepError> {
+        let dt = self.dt;
+        let before = self.links();
         let energy_before = self.state.kinetic_j - self.state.released_j;
-        self.world.step();
-        // Each link's body holds its index along the chain.
-        let contacts: Vec<(usize, FloorImpulse)> = match self.floor {
-            None => Vec::new(),
-            Some(floor) => floor_impulses(&self.world.narrow_phase, &self.world.colliders, floor)
-                .filter_map(|(body, c)| Some((self.world.bodies.get(body)?.user_data as usize, c)))
-                .collect(),
+        let g = self.g;
+        // Each contact beside the index of its link along the chain.
+        let mut gravity_work = None;
+        let contacts: Vec<(usize, FloorImpulse)> = match &mut self.engine {
+            Engine::Rapier { world, floor, .. } => {
+                world.step();
+                match *floor {
+                    None => Vec::new(),
+                    Some(floor) => floor_impulses(&world.narrow_phase, &world.colliders, floor)
+                        .filter_map(|(body, c)| {
+                            Some((world.bodies.get(body)?.user_data as usize, c))
+                        })
+                        .collect(),
+                }
+            }
+            Engine::Exact(chain) => {
+                let report = chain.step(dt, [0.0, -g])?;
+                self.solve.add(&report);
+                gravity_work = Some(report.gravity_work_j);
+                chain.contacts().iter().map(exact_chain_impulse).collect()
+            }
         };
-        let moved = moved(&self.world.bodies, self.links.iter().copied(), &before);
-        let work = step_work(&moved, &contacts, self.world.gravity, dt);
+        let after = self.links();
+        let (_, m, _) = self.link;
+        let moved: Vec<Moved> = before
+            .iter()
+            .zip(&after)
+            .map(|(a, b)| Moved {
+                mass: m,
+                before: body_state(a),
+                after: body_state(b),
+            })
+            .collect();
+        let work = step_work(&moved, &contacts, Vector::new(0.0, -g), dt, gravity_work);
         // The chain's momentum balance: the pin's impulse is what gravity and the floor
         // leave of the momentum's change.
-        let (_, m, _) = self.link;
         let dp: f64 = moved
             .iter()
             .map(|b| m * (b.after.linvel.y - b.before.linvel.y))
@@ -179,8 +147,8 @@ impl FoldedModel {
             .iter()
             .map(|(_, c)| (c.normal + c.friction).y)
             .sum();
-        let pin = dp - floor_up + m * self.links.len() as f64 * self.g * dt;
-        let mut next = self.observe(self.state.t + dt, self.state.pin_impulse_ns + pin);
+        let pin = dp - floor_up + m * after.len() as f64 * g * dt;
+        let mut next = self.observe(&after, self.state.t + dt, self.state.pin_impulse_ns + pin);
         let mut ledger = self.state.ledger;
         ledger.floor_normal_j -= work.normal_j;
         ledger.floor_friction_j -= work.friction_j;
@@ -190,64 +158,220 @@ impl FoldedModel {
             energy_before - energy_after + work.normal_j + work.friction_j + work.joints_j;
         next.ledger = ledger;
         self.state = next;
-        next
+        Ok(next)
+    }
+
+    /// Every link's state, from the pin on: the exact chain's bodies, or the engine's read
+    /// as such (each link's centre of mass is its centre).
+    fn links(&self) -> Vec<Body> {
+        let (_, m, inertia) = self.link;
+        match &self.engine {
+            Engine::Exact(chain) => chain.bodies().to_vec(),
+            Engine::Rapier { world, links, .. } => links
+                .iter()
+                .map(|&h| {
+                    let b = &world.bodies[h];
+                    let (p, v) = (b.translation(), b.linvel());
+                    Body {
+                        mass_kg: m,
+                        inertia_kg_m2: inertia,
+                        position_m: [p.x, p.y],
+                        angle_rad: b.rotation().angle(),
+                        velocity_m_s: [v.x, v.y],
+                        spin_rad_s: b.angvel(),
+                    }
+                })
+                .collect(),
+        }
     }
 
     /// The chain's potential energy relative to the plane y = 0 (J).
-    fn potential_j(&self) -> f64 {
+    fn potential_j(&self, links: &[Body]) -> f64 {
         let (_, m, _) = self.link;
-        self.links
-            .iter()
-            .map(|&h| m * self.g * self.world.bodies[h].translation().y)
-            .sum()
+        links.iter().map(|b| m * self.g * b.position_m[1]).sum()
     }
 
-    /// The state at time `t`, with the pin's impulse `pin` so far and no ledger.
-    fn observe(&self, t: f64, pin: f64) -> ChainState {
-        let (l, m, inertia) = self.link;
-        let kinetic_j = self
-            .links
-            .iter()
-            .map(|&h| {
-                let b = &self.world.bodies[h];
-                0.5 * m * b.linvel().length_squared() + 0.5 * inertia * b.angvel() * b.angvel()
-            })
-            .sum();
-        let last = &self.world.bodies[*self.links.last().expect("at least four links")];
-        let end = Vector::new(0.5 * l, 0.0);
-        let tip = last.position().transform_point(end);
-        let arm = tip - last.translation();
-        let tip_vy = last.linvel().y + last.angvel() * arm.x;
+    /// The state at time `t` of `links`, with the pin's impulse `pin` so far and no ledger.
+    fn observe(&self, links: &[Body], t: f64, pin: f64) -> ChainState {
+        let (l, _, _) = self.link;
+        let kinetic_j = links.iter().map(Body::kinetic_j).sum();
+        let last = links.last().expect("at least four links");
+        let arm = last.arm([0.5 * l, 0.0]);
+        let tip = last.point([0.5 * l, 0.0]);
         ChainState {
             t,
-            x_m: self.pin_height_m - tip.y,
-            speed_m_s: -tip_vy,
+            x_m: self.pin_height_m - tip[1],
+            speed_m_s: -last.velocity_at(arm)[1],
             pin_impulse_ns: pin,
             kinetic_j,
-            released_j: self.potential0_j - self.potential_j(),
+            released_j: self.potential0_j - self.potential_j(links),
             ledger: BangLedger::default(),
         }
     }
 
     /// The lowest point of the chain now (m above the plane y = 0).
     pub fn lowest_m(&self) -> f64 {
-        let end = Vector::new(0.5 * self.link.0, 0.0);
-        self.links
+        let l = self.link.0;
+        self.links()
             .iter()
-            .map(|&h| {
-                let p = self.world.bodies[h].position();
-                p.transform_point(end).y.min(p.transform_point(-end).y)
-            })
+            .map(|b| b.point([0.5 * l, 0.0])[1].min(b.point([-0.5 * l, 0.0])[1]))
             .fold(f64::INFINITY, f64::min)
     }
 
     /// The engine's own kinetic energy of the chain (J), to check the masses it uses.
     #[cfg(test)]
     fn engine_kinetic_j(&self) -> f64 {
-        self.links
-            .iter()
-            .map(|&h| self.world.bodies[h].kinetic_energy())
-            .sum()
+        match &self.engine {
+            Engine::Rapier { world, links, .. } => links
+                .iter()
+                .map(|&h| world.bodies[h].kinetic_energy())
+                .sum(),
+            Engine::Exact(chain) => chain.kinetic_j(),
+        }
+    }
+}
+
+/// The work split's view of a link's motion.
+fn body_state(b: &Body) -> BodyState {
+    BodyState {
+        linvel: Vector::new(b.velocity_m_s[0], b.velocity_m_s[1]),
+        angvel: b.spin_rad_s,
+        kinetic_j: b.kinetic_j(),
+    }
+}
+
+/// An exact chain's contact as the work split books it, beside its body's index.
+pub(super) fn exact_chain_impulse(c: &exact_chain::ContactImpulse) -> (usize, FloorImpulse) {
+    let v = |p: [f64; 2]| Vector::new(p[0], p[1]);
+    (
+        c.body,
+        FloorImpulse {
+            normal: v(c.normal_n_s),
+            friction: v(c.friction_n_s),
+            arm: v(c.arm_m),
+            work_j: Some(c.work_j),
+        },
+    )
+}
+
+/// The chain in its fold on the exact chain: each link a body about its centre, pinned at
+/// its first node; on the floor, each link touching it at its far node (its near node is
+/// the pin's or the link before's).
+fn exact_fold(scene: &FoldedChain, nodes: &[Vector], m: f64, inertia: f64) -> ExactChain {
+    let l = scene.chain.link_m();
+    let bodies = nodes
+        .windows(2)
+        .map(|w| {
+            let c = 0.5 * (w[0] + w[1]);
+            Body {
+                mass_kg: m,
+                inertia_kg_m2: inertia,
+                position_m: [c.x, c.y],
+                angle_rad: (w[1] - w[0]).to_angle(),
+                velocity_m_s: [0.0, 0.0],
+                spin_rad_s: 0.0,
+            }
+        })
+        .collect::<Vec<_>>();
+    let joints = vec![
+        Joint {
+            prev: [0.5 * l, 0.0],
+            next: [-0.5 * l, 0.0],
+        };
+        bodies.len() - 1
+    ];
+    let pin = Pin {
+        anchor: [-0.5 * l, 0.0],
+        at_m: [nodes[0].x, nodes[0].y],
+    };
+    let n = bodies.len();
+    let mut chain = ExactChain::new(bodies, joints, Some(pin), exact_chain::tolerance_for(l));
+    if scene.floor.enabled {
+        let floor = Floor {
+            point_m: [0.0, 0.0],
+            normal: [0.0, 1.0],
+            friction: scene.floor.friction,
+        };
+        chain.set_floor(floor, &vec![vec![[0.5 * l, 0.0]]; n]);
+    }
+    chain
+}
+
+/// The chain in its fold in rapier's world, with the scene's joints.
+fn rapier_fold(scene: &FoldedChain, nodes: &[Vector], m: f64, inertia: f64) -> Engine {
+    let l = scene.chain.link_m();
+    let mut world = PhysicsWorld::new();
+    world.gravity = Vector::new(0.0, -scene.gravity.g_m_s2);
+    let ip = &mut world.integration_parameters;
+    ip.dt = scene.solver.dt_s;
+    ip.num_solver_iterations = scene.solver.substeps as usize;
+    ip.num_internal_stabilization_iterations = scene.solver.relax_iterations as usize;
+    ip.length_unit = l;
+    ip.normalized_max_linear_velocity = Real::MAX;
+    let soft = SpringCoefficients::new(
+        scene.solver.contact_hz,
+        ip.static_contact_softness.damping_ratio,
+    );
+    ip.static_contact_softness = soft;
+    ip.contact_softness = soft;
+    let ground = world
+        .insert_body(RigidBodyBuilder::fixed().translation(Vector::new(0.0, scene.pin_height_m)));
+    let floor = scene.floor.enabled.then(|| {
+        world.insert_collider(
+            floor_builder(-scene.pin_height_m, scene.floor.friction),
+            Some(ground),
+        )
+    });
+    let joint_soft = SpringCoefficients::new(
+        scene.solver.joint_hz,
+        SpringCoefficients::<Real>::joint_defaults().damping_ratio,
+    );
+    let (near, far) = (Vector::new(-0.5 * l, 0.0), Vector::new(0.5 * l, 0.0));
+    let mut links = Vec::with_capacity(nodes.len() - 1);
+    for (k, w) in nodes.windows(2).enumerate() {
+        let (a, b) = (w[0], w[1]);
+        let body = world.insert_body(
+            RigidBodyBuilder::dynamic()
+                .pose(Pose::new(0.5 * (a + b), (b - a).to_angle()))
+                .additional_mass_properties(MassProperties::new(Vector::ZERO, m, inertia))
+                .user_data(k as u128)
+                .can_sleep(false),
+        );
+        if floor.is_some() {
+            world.insert_collider(
+                ColliderBuilder::polyline(vec![near, far], None)
+                    .density(0.0)
+                    .friction(scene.floor.friction)
+                    .collision_groups(Model::tape_groups()),
+                Some(body),
+            );
+        }
+        world.bodies[body].recompute_mass_properties_from_colliders(&world.colliders);
+        let (parent, anchor) = match links.last() {
+            None => (ground, Vector::ZERO),
+            Some(&prev) => (prev, far),
+        };
+        let joint = RevoluteJointBuilder::new()
+            .local_anchor1(anchor)
+            .local_anchor2(near)
+            .contacts_enabled(false)
+            .softness(joint_soft);
+        if scene.solver.joints == ChainJoints::Multibody {
+            world
+                .insert_multibody_joint(parent, body, joint)
+                .expect("a chain has no loop");
+        } else {
+            world.insert_impulse_joint(parent, body, joint);
+        }
+        links.push(body);
+    }
+    if scene.solver.joints == ChainJoints::Multibody {
+        fold_multibody(&mut world, &links, nodes);
+    }
+    Engine::Rapier {
+        world: Box::new(world),
+        links,
+        floor,
     }
 }
 
@@ -328,7 +452,7 @@ mod tests {
     fn the_engine_moves_the_masses_as_built() {
         let mut model = chain("[chain]\nlinks = 20\n[solver]\ndt_s = 1e-4");
         for _ in 0..200 {
-            model.step();
+            model.step().expect("steps");
         }
         let s = model.state();
         assert!(s.kinetic_j > 0.0);

@@ -19,6 +19,9 @@ impl Model {
     }
 
     pub(super) fn max_penetration(&self) -> f64 {
+        if let (true, Some(exact)) = (self.on_exact_chain(), &self.exact) {
+            return exact.penetration_m;
+        }
         let mut deepest: f64 = 0.0;
         for pair in self.world.narrow_phase.contact_pairs_with(self.floor) {
             if let PairContacts::Rigid(contacts) = &pair.contacts {
@@ -162,6 +165,7 @@ impl Model {
             lowest_m: 0.0,
             max_spin_rad_s: 0.0,
             finite: true,
+            unsolved: self.exact.as_ref().and_then(|e| e.failed),
         };
         for (_, body) in self.world.bodies.iter() {
             if !body.is_dynamic() {

@@ -38,6 +38,8 @@ pub(super) struct Settings {
     pub(super) bang_fraction: f64,
     pub(super) bang_iterations: usize,
     pub(super) bang_relax_iterations: usize,
+    /// What solves the bang.
+    pub(super) bang_engine: crate::scene::BangEngine,
     pub(super) bang_cap_s: f64,
     pub(super) rest_fraction: f64,
     pub(super) total_mass: f64,

@@ -91,6 +91,10 @@ pub(super) struct FloorImpulse {
     pub normal: Vector,
     pub friction: Vector,
     pub arm: Vector,
+    /// The normal's and friction's work as the solver that applied them measured it (the
+    /// exact chain applies them at the step's start, not over the whole step), J; `None`:
+    /// the impulse times the mean velocity over the step.
+    pub work_j: Option<[f64; 2]>,
 }
 
 /// The floor's impulses on everything touching it during the last step (summed over the
@@ -138,6 +142,7 @@ pub(super) fn floor_impulses(
                             } else {
                                 data.solver_dp1
                             },
+                            work_j: None,
                         },
                     ));
                 }
@@ -182,32 +187,48 @@ pub(super) struct StepWork {
 }
 
 /// The work of one step on `bodies`; `floor` are the floor's impulses of the step, by index
-/// into `bodies`.
+/// into `bodies`; `gravity_work_j` gravity's work if the solver measured it (the exact
+/// chain's half kicks), else gravity's impulse times each body's mean velocity over the
+/// step.
 pub(super) fn step_work(
     bodies: &[Moved],
     floor: &[(usize, FloorImpulse)],
     gravity: Vector,
     dt: f64,
+    gravity_work_j: Option<f64>,
 ) -> StepWork {
     let (mut normal_w, mut friction_w) = (0.0, 0.0);
     let mut floor_w = vec![0.0; bodies.len()];
     for &(i, c) in floor {
-        let m = &bodies[i];
-        let u = 0.5 * (m.before.velocity_at(c.arm) + m.after.velocity_at(c.arm));
-        normal_w += c.normal.dot(u);
-        friction_w += c.friction.dot(u);
-        floor_w[i] += (c.normal + c.friction).dot(u);
+        let [n, f] = c.work_j.unwrap_or_else(|| {
+            let m = &bodies[i];
+            let u = 0.5 * (m.before.velocity_at(c.arm) + m.after.velocity_at(c.arm));
+            [c.normal.dot(u), c.friction.dot(u)]
+        });
+        normal_w += n;
+        friction_w += f;
+        floor_w[i] += n + f;
     }
     // The joints' impulses are the rest of each body's momentum change, so their work is
-    // the rest of its kinetic-energy change: exact, with no lever arm to guess.
-    let joint_w: f64 = bodies
-        .iter()
-        .zip(&floor_w)
-        .map(|(m, &floor)| {
-            let gravity_w = (gravity * (m.mass * dt)).dot(0.5 * (m.before.linvel + m.after.linvel));
-            m.after.kinetic_j - m.before.kinetic_j - gravity_w - floor
-        })
-        .sum();
+    // the rest of the kinetic-energy change: exact, with no lever arm to guess.
+    let joint_w: f64 = match gravity_work_j {
+        Some(gravity_w) => {
+            let kinetic: f64 = bodies
+                .iter()
+                .map(|m| m.after.kinetic_j - m.before.kinetic_j)
+                .sum();
+            kinetic - gravity_w - normal_w - friction_w
+        }
+        None => bodies
+            .iter()
+            .zip(&floor_w)
+            .map(|(m, &floor)| {
+                let gravity_w =
+                    (gravity * (m.mass * dt)).dot(0.5 * (m.before.linvel + m.after.linvel));
+                m.after.kinetic_j - m.before.kinetic_j - gravity_w - floor
+            })
+            .sum(),
+    };
     StepWork {
         normal_j: normal_w,
         friction_j: friction_w,

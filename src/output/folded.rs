@@ -13,7 +13,7 @@ use crate::output::folder::{FileStamp, REPORT, RunFolder, SAMPLES};
 use crate::output::table::Table;
 use crate::output::{partial_path, write_atomic};
 use crate::run::folded::{ChainEnd, ChainReport, Crossing, run_chain};
-use crate::scene::folded::FoldedChain;
+use crate::scene::folded::{ChainJoints, FoldedChain};
 
 /// What `report.json` holds for a folded chain: the scene as given and what the run found.
 #[derive(Serialize)]
@@ -79,18 +79,34 @@ pub fn chain_summary(scene: &FoldedChain, r: &ChainReport) -> String {
     } else {
         "no floor".to_owned()
     };
+    let solver = match s.joints {
+        ChainJoints::Exact => format!(
+            "the exact chain, a {} s step: {:.2} iterations a step on average, at most {}, {} \
+             step(s) missed the tolerance; widest joint gap {:.1e} m, deepest contact {:.1e} m",
+            s.dt_s,
+            r.solve.mean_iterations(),
+            r.solve.max_iterations,
+            r.solve.missed_steps,
+            r.solve.max_joint_gap_m,
+            r.solve.max_penetration_m,
+        ),
+        joints => format!(
+            "{} joints, {} substeps of a {} s step, {} relax sweep(s), joints at {:e} Hz",
+            if joints == ChainJoints::Multibody {
+                "multibody"
+            } else {
+                "impulse"
+            },
+            s.substeps,
+            s.dt_s,
+            s.relax_iterations,
+            s.joint_hz,
+        ),
+    };
     let mut o = format!(
         "{}: a folded chain of {} links, L = {} m, M = {} kg, ends {} m apart, {floor}\n\
-         solver: {} substeps of a {} s step, {} relax sweep(s), joints at {:e} Hz\n",
-        r.name,
-        c.links,
-        c.length_m,
-        c.mass_kg,
-        c.separation_m,
-        s.substeps,
-        s.dt_s,
-        s.relax_iterations,
-        s.joint_hz,
+         solver: {solver}\n",
+        r.name, c.links, c.length_m, c.mass_kg, c.separation_m,
     );
     let end = match r.end {
         ChainEnd::TipFraction => format!("the tip fell {} L", scene.stop.tip_fraction),
@@ -98,6 +114,7 @@ pub fn chain_summary(scene: &FoldedChain, r: &ChainReport) -> String {
         ChainEnd::MaxTime => "max time".to_owned(),
         ChainEnd::Interrupted => "interrupted".to_owned(),
         ChainEnd::NotFinite => "stopped: the state is no longer finite".to_owned(),
+        ChainEnd::Unsolved => "stopped: the exact chain's solve failed".to_owned(),
     };
     o.push_str(&format!(
         "ended: {end} at t = {:.4} s ({} steps, engine {:.2} s)\n\n",

@@ -9,6 +9,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use crate::model::BangLedger;
+use crate::model::exact_chain::SolveStats;
 use crate::model::folded::{ChainState, FoldedModel};
 use crate::scene::folded::FoldedChain;
 use crate::theory::folded::FoldedFall;
@@ -85,6 +86,9 @@ pub enum ChainEnd {
     Interrupted,
     /// A position or velocity stopped being finite.
     NotFinite,
+    /// The exact chain's solve failed (a singular system or a non-finite impulse); the
+    /// step that failed was not taken.
+    Unsolved,
 }
 
 /// What a folded chain's run found.
@@ -112,6 +116,9 @@ pub struct ChainReport {
     pub kinetic_j: f64,
     /// Dissipated by mechanism at the end (J).
     pub ledger: BangLedger,
+    /// How the exact chain's steps were solved (all zero on the engine's joints).
+    #[serde(default)]
+    pub solve: SolveStats,
 }
 
 /// Runs `scene`, handing each sample due to `on_sample`, until its stop rule, `max_time_s`
@@ -135,8 +142,11 @@ pub fn run_chain(
             break ChainEnd::Interrupted;
         }
         let clock = Instant::now();
-        let s = model.step();
+        let stepped = model.step();
         wall += clock.elapsed().as_secs_f64();
+        let Ok(s) = stepped else {
+            break ChainEnd::Unsolved;
+        };
         steps += 1;
         if ![s.x_m, s.speed_m_s, s.kinetic_j, s.released_j]
             .iter()
@@ -179,6 +189,7 @@ pub fn run_chain(
         released_j: prev.released_j,
         kinetic_j: prev.kinetic_j,
         ledger: prev.ledger,
+        solve: model.solve_stats(),
     })
 }
 

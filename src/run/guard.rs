@@ -124,6 +124,9 @@ impl Guard {
                 bound,
             })
         };
+        if let Some(e) = health.unsolved {
+            return trip(GuardKind::Unsolved(e.to_string()), 0.0, 0.0);
+        }
         if let Some(name) = non_finite(obs, health) {
             return trip(GuardKind::NonFinite(name.to_owned()), 0.0, 0.0);
         }
@@ -191,6 +194,9 @@ fn non_finite(obs: &Observation, health: &Health) -> Option<&'static str> {
 pub enum GuardKind {
     /// A quantity of the state is not finite (its name); value and bound are 0.
     NonFinite(String),
+    /// The exact chain could not solve a step of the bang (why); value and bound are 0. The
+    /// step was not taken.
+    Unsolved(String),
     /// The total energy rose above E0 by more than the bound (J).
     EnergyRise,
     /// A joint separated by more than the bound (m).
@@ -222,6 +228,7 @@ impl GuardTrip {
     pub fn name(&self) -> &'static str {
         match self.guard {
             GuardKind::NonFinite(_) => "non-finite",
+            GuardKind::Unsolved(_) => "unsolved",
             GuardKind::EnergyRise => "energy-rise",
             GuardKind::JointGap => "joint-gap",
             GuardKind::Penetration => "penetration",
@@ -238,6 +245,7 @@ impl fmt::Display for GuardTrip {
             GuardKind::NonFinite(name) => {
                 write!(f, "blow-up at t = {t:.6} s: {name} is not finite")
             }
+            GuardKind::Unsolved(why) => write!(f, "unsolved step at t = {t:.6} s: {why}"),
             GuardKind::EnergyRise => write!(
                 f,
                 "energy rising at t = {t:.6} s: E - E0 = {v:.4e} J, above the bound {b:.4e} J \
@@ -308,6 +316,7 @@ pub(crate) mod tests {
             lowest_m: 0.002,
             max_spin_rad_s: 5.0,
             finite: true,
+            unsolved: None,
         }
     }
 

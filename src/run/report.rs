@@ -6,6 +6,7 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
+use crate::model::exact_chain::SolveStats;
 use crate::model::{BangEnd, EnergyLedger};
 use crate::run::guard::Bounds;
 use crate::run::limits::ReferenceLimit;
@@ -142,6 +143,9 @@ pub struct BangReport {
     /// What ended the bang; `None` if the run stopped first (guard, `stop.max_time_s`,
     /// interrupted).
     pub ended_by: Option<BangEnd>,
+    /// How the exact chain solved the bang's steps (all zero on the engine's).
+    #[serde(default)]
+    pub solve: SolveStats,
 }
 
 /// The approach to the bang: how far the contact line's speed diverged before the coil was

@@ -352,6 +352,7 @@ impl<'s> Runner<'s> {
                 laid_length_m: self.model.tape_length_m(),
                 still_moving_j: last.kinetic_j,
                 ended_by: last.bang.end,
+                solve: last.bang.solve,
             }),
             geo_hop_fraction: self.refs.exact.hop_onset_fraction(),
             max_joint_gap_m: self.max_gap,

@@ -34,6 +34,7 @@ pub const SCENE_KEYS: &[&str] = &[
     "solver.contact_hz",
     "solver.joint_hz",
     "solver.bang_joint_hz",
+    "solver.bang_engine",
     "contact.model",
     "stop.bang_radius_m",
     "stop.max_time_s",
@@ -68,6 +69,8 @@ const DEFAULT_CONTACT_HZ: f64 = 1.0e4;
 const DEFAULT_JOINT_HZ: f64 = 1.0e7;
 /// Default `solver.bang_joint_hz`.
 const DEFAULT_BANG_JOINT_HZ: f64 = 1.0e9;
+/// Default `solver.bang_engine`.
+const DEFAULT_BANG_ENGINE: &str = "rapier";
 /// Default `stop.max_time_s`.
 const DEFAULT_MAX_TIME_S: f64 = 60.0;
 /// Default `solver.bang_iterations`.
@@ -195,6 +198,7 @@ pub(super) struct SolverFile {
     pub(super) contact_hz: f64,
     pub(super) joint_hz: f64,
     pub(super) bang_joint_hz: f64,
+    pub(super) bang_engine: String,
 }
 
 impl Default for SolverFile {
@@ -211,6 +215,7 @@ impl Default for SolverFile {
             contact_hz: DEFAULT_CONTACT_HZ,
             joint_hz: DEFAULT_JOINT_HZ,
             bang_joint_hz: DEFAULT_BANG_JOINT_HZ,
+            bang_engine: DEFAULT_BANG_ENGINE.into(),
         }
     }
 }
@@ -429,6 +434,7 @@ mod tests {
                 "solver.contact_hz" => "1e4",
                 "solver.joint_hz" => "1e7",
                 "solver.bang_joint_hz" => "1e9",
+                "solver.bang_engine" => "rapier",
                 "contact.model" => "spiral",
                 "stop.bang_radius_m" => "0.01",
                 "stop.max_time_s" => "60",

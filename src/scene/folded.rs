@@ -139,6 +139,11 @@ pub enum ChainJoints {
     /// angles its coordinates; its joints cannot open and do no work, and its dense solve
     /// grows as the cube of the links. No damping is applied to its angles.
     Multibody,
+    /// `"exact"`: the exact chain (`model::exact_chain`), the joints solved directly at
+    /// every step in time linear in the links, the floor's contacts to a stated tolerance;
+    /// one solve a step (`solver.substeps`, `relax_iterations`, `joint_hz` and `contact_hz`
+    /// are the engine's and do not apply).
+    Exact,
 }
 
 /// `[stop]`.
@@ -360,11 +365,12 @@ impl FoldedChain {
             joints: match s.joints.as_str() {
                 "impulse" => ChainJoints::Impulse,
                 "multibody" => ChainJoints::Multibody,
+                "exact" => ChainJoints::Exact,
                 other => {
                     return Err(invalid(
                         "solver.joints",
                         format!("{other:?}"),
-                        "must be \"impulse\" or \"multibody\"",
+                        "must be \"impulse\", \"multibody\" or \"exact\"",
                     ));
                 }
             },

@@ -13,7 +13,8 @@ use crate::scene::file::{
 };
 use crate::scene::rules::{check, check_int, invalid, name};
 use crate::scene::{
-    Axis, Discretisation, Floor, Gravity, Output, Push, Scene, SceneError, Solver, Stop, Tape,
+    Axis, BangEngine, Discretisation, Floor, Gravity, Output, Push, Scene, SceneError, Solver,
+    Stop, Tape,
 };
 
 /// Bounds of `discretisation.links_per_turn`.
@@ -263,6 +264,17 @@ fn solver(s: &SolverFile, tape: &Tape) -> Result<Solver, SceneError> {
         contact_hz: positive("solver.contact_hz", s.contact_hz)?,
         joint_hz: positive("solver.joint_hz", s.joint_hz)?,
         bang_joint_hz: positive("solver.bang_joint_hz", s.bang_joint_hz)?,
+        bang_engine: match s.bang_engine.as_str() {
+            "exact" => BangEngine::Exact,
+            "rapier" => BangEngine::Rapier,
+            other => {
+                return Err(invalid(
+                    "solver.bang_engine",
+                    format!("{other:?}"),
+                    "must be \"exact\" or \"rapier\"",
+                ));
+            }
+        },
     })
 }
 

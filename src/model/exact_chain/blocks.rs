@@ -1,6 +1,7 @@
 //! A block-tridiagonal linear system solved exactly by block LU (block Thomas), in time
-//! linear in its number of blocks: each diagonal block a small dense matrix factorised with
-//! partial pivoting, no iteration count. It knows nothing of chains or contacts.
+//! linear in its number of blocks: each diagonal block's Schur complement a small dense
+//! matrix inverted with partial pivoting, no iteration count. It knows nothing of chains or
+//! contacts.
 //!
 //! ```text
 //! | D_0 U_0             | | x_0 |   | b_0 |
@@ -9,8 +10,9 @@
 //! |         ...         | | ... |   | ... |
 //! ```
 //!
-//! Forward: `D_i <- D_i - L_i D_{i-1}^-1 U_{i-1}`, `b_i <- b_i - L_i D_{i-1}^-1 b_{i-1}`;
-//! back: `x_i = D_i^-1 b_i - D_i^-1 U_i x_{i+1}`.
+//! Factor: `D_i <- D_i - L_i D_{i-1}^-1 U_{i-1}`; forward: `z_i = D_i^-1 (b_i - L_i
+//! z_{i-1})`; back: `x_i = z_i - D_i^-1 U_i x_{i+1}`. One factorisation serves many
+//! right-hand sides.
 
 /// A pivot smaller than this fraction of its block's largest entry means a singular system.
 const SINGULAR: f64 = 1e-13;
@@ -27,8 +29,7 @@ pub(super) struct BlockTridiag {
     diag: Vec<f64>,
     upper: Vec<f64>,
     lower: Vec<f64>,
-    pivots: Vec<usize>,
-    /// One row of products, the widest block's.
+    /// Room for a block's inverse or product.
     work: Vec<f64>,
 }
 
@@ -62,11 +63,6 @@ impl BlockTridiag {
         self.upper.resize(off, 0.0);
         self.lower.clear();
         self.lower.resize(off, 0.0);
-        self.pivots.clear();
-        self.pivots.resize(row, 0);
-        let widest = sizes.iter().copied().max().unwrap_or(0);
-        self.work.clear();
-        self.work.resize(widest, 0.0);
     }
 
     /// Block `i`'s first unknown.
@@ -97,25 +93,61 @@ impl BlockTridiag {
         &mut self.lower[self.off_at[i] + r * s + c]
     }
 
-    /// Factorises the system and solves it for `b`, which becomes the solution. The blocks
-    /// are overwritten: `reset` and fill them again before the next solve.
-    pub(super) fn solve(&mut self, b: &mut [f64]) -> Result<(), Singular> {
+    /// Factorises the system in place: each diagonal block becomes the inverse of its Schur
+    /// complement, each `U_i` becomes `D_i^-1 U_i`. Fill the blocks again (after `reset`)
+    /// before the next factorisation.
+    pub(super) fn factor(&mut self) -> Result<(), Singular> {
         let n = self.sizes.len();
         for i in 0..n {
             if i > 0 {
-                self.eliminate_lower(i, b);
+                self.eliminate_lower(i);
             }
-            let (s, at, row) = (self.sizes[i], self.diag_at[i], self.row_at[i]);
-            let block = &mut self.diag[at..at + s * s];
-            lu_factor(block, s, &mut self.pivots[row..row + s])
+            let (s, at) = (self.sizes[i], self.diag_at[i]);
+            invert(&mut self.diag[at..at + s * s], s, &mut self.work)
                 .map_err(|()| Singular { block: i })?;
-            let block = &self.diag[at..at + s * s];
-            let pivots = &self.pivots[row..row + s];
-            lu_solve(block, s, pivots, &mut b[row..row + s], 1);
             if i + 1 < n {
-                // U_i becomes D_i^-1 U_i.
                 let (s1, off) = (self.sizes[i + 1], self.off_at[i]);
-                lu_solve(block, s, pivots, &mut self.upper[off..off + s * s1], s1);
+                let inverse = &self.diag[at..at + s * s];
+                let upper = &mut self.upper[off..off + s * s1];
+                multiply_in_place(inverse, s, upper, s1, &mut self.work);
+            }
+        }
+        Ok(())
+    }
+
+    /// Solves the factorised system for `b`, which becomes the solution.
+    pub(super) fn solve(&self, b: &mut [f64]) {
+        let n = self.sizes.len();
+        let mut z = [0.0; MAX_INLINE];
+        for i in 0..n {
+            let (s, at, row) = (self.sizes[i], self.diag_at[i], self.row_at[i]);
+            if i > 0 {
+                let (s0, off, prev) = (self.sizes[i - 1], self.off_at[i - 1], self.row_at[i - 1]);
+                for r in 0..s {
+                    let l = &self.lower[off + r * s0..off + (r + 1) * s0];
+                    let dot: f64 = l.iter().zip(&b[prev..prev + s0]).map(|(a, x)| a * x).sum();
+                    b[row + r] -= dot;
+                }
+            }
+            let inverse = &self.diag[at..at + s * s];
+            if s <= MAX_INLINE {
+                z[..s].copy_from_slice(&b[row..row + s]);
+                for r in 0..s {
+                    b[row + r] = inverse[r * s..(r + 1) * s]
+                        .iter()
+                        .zip(&z[..s])
+                        .map(|(a, x)| a * x)
+                        .sum();
+                }
+            } else {
+                let rhs = b[row..row + s].to_vec();
+                for r in 0..s {
+                    b[row + r] = inverse[r * s..(r + 1) * s]
+                        .iter()
+                        .zip(&rhs)
+                        .map(|(a, x)| a * x)
+                        .sum();
+                }
             }
         }
         for i in (0..n.saturating_sub(1)).rev() {
@@ -127,105 +159,111 @@ impl BlockTridiag {
                 b[row + r] -= dot;
             }
         }
-        Ok(())
     }
 
-    /// `D_i -= L_i W_{i-1}` and `b_i -= L_i z_{i-1}`, with `W_{i-1} = D_{i-1}^-1 U_{i-1}`
-    /// (held in `upper`) and `z_{i-1} = D_{i-1}^-1 b_{i-1}` (held in `b`).
-    fn eliminate_lower(&mut self, i: usize, b: &mut [f64]) {
+    /// `D_i -= L_i W_{i-1}`, with `W_{i-1} = D_{i-1}^-1 U_{i-1}` (held in `upper`).
+    fn eliminate_lower(&mut self, i: usize) {
         let (s0, s) = (self.sizes[i - 1], self.sizes[i]);
         let (off, at) = (self.off_at[i - 1], self.diag_at[i]);
-        let (prev, row) = (self.row_at[i - 1], self.row_at[i]);
         for r in 0..s {
             let l = &self.lower[off + r * s0..off + (r + 1) * s0];
-            self.work[..s].fill(0.0);
-            let mut rhs = 0.0;
+            let d = &mut self.diag[at + r * s..at + (r + 1) * s];
             for (k, &lk) in l.iter().enumerate() {
                 if lk == 0.0 {
                     continue;
                 }
-                rhs += lk * b[prev + k];
                 let w = &self.upper[off + k * s..off + (k + 1) * s];
-                for (acc, &wc) in self.work[..s].iter_mut().zip(w) {
-                    *acc += lk * wc;
+                for (dc, &wc) in d.iter_mut().zip(w) {
+                    *dc -= lk * wc;
                 }
-            }
-            b[row + r] -= rhs;
-            let d = &mut self.diag[at + r * s..at + (r + 1) * s];
-            for (dc, &acc) in d.iter_mut().zip(&self.work[..s]) {
-                *dc -= acc;
             }
         }
     }
 }
 
-/// LU factorisation with partial pivoting of the `n` by `n` row-major matrix `a`, in place.
-fn lu_factor(a: &mut [f64], n: usize, pivots: &mut [usize]) -> Result<(), ()> {
+/// Blocks up to this size are solved without allocating.
+const MAX_INLINE: usize = 16;
+
+/// Inverts the `n` by `n` row-major matrix `a` in place by Gauss-Jordan elimination with
+/// partial pivoting (a 2 by 2 block, the joints' alone, in closed form); `work` holds at
+/// least `2 n` entries. Fails if a pivot is below [`SINGULAR`] of the largest entry.
+fn invert(a: &mut [f64], n: usize, work: &mut Vec<f64>) -> Result<(), ()> {
     let scale = a.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
     if !(scale.is_finite() && scale > 0.0) {
         return Err(());
     }
-    for k in 0..n {
-        let p = (k..n)
-            .max_by(|&i, &j| a[i * n + k].abs().total_cmp(&a[j * n + k].abs()))
-            .unwrap_or(k);
-        pivots[k] = p;
-        if p != k {
-            for c in 0..n {
-                a.swap(k * n + c, p * n + c);
-            }
-        }
-        let pivot = a[k * n + k];
-        if pivot.abs() <= SINGULAR * scale {
+    if n == 1 {
+        if a[0].abs() <= SINGULAR * scale {
             return Err(());
         }
-        for r in k + 1..n {
-            let f = a[r * n + k] / pivot;
-            a[r * n + k] = f;
-            if f != 0.0 {
-                for c in k + 1..n {
-                    a[r * n + c] -= f * a[k * n + c];
-                }
+        a[0] = 1.0 / a[0];
+        return Ok(());
+    }
+    if n == 2 {
+        let det = a[0] * a[3] - a[1] * a[2];
+        let pivot = a[0].abs().max(a[2].abs());
+        if pivot <= SINGULAR * scale || det.abs() <= SINGULAR * scale * pivot {
+            return Err(());
+        }
+        let [p, q, r, t] = [a[0], a[1], a[2], a[3]];
+        a.copy_from_slice(&[t / det, -q / det, -r / det, p / det]);
+        return Ok(());
+    }
+    // Gauss-Jordan on [a | I], the right half kept in `work` row by row.
+    work.clear();
+    work.resize(n * n, 0.0);
+    for k in 0..n {
+        work[k * n + k] = 1.0;
+    }
+    for col in 0..n {
+        let p = (col..n)
+            .max_by(|&i, &j| a[i * n + col].abs().total_cmp(&a[j * n + col].abs()))
+            .unwrap_or(col);
+        if p != col {
+            for c in 0..n {
+                a.swap(col * n + c, p * n + c);
+                work.swap(col * n + c, p * n + c);
+            }
+        }
+        let d = a[col * n + col];
+        if d.abs() <= SINGULAR * scale {
+            return Err(());
+        }
+        for c in 0..n {
+            a[col * n + c] /= d;
+            work[col * n + c] /= d;
+        }
+        for r in 0..n {
+            let f = a[r * n + col];
+            if r == col || f == 0.0 {
+                continue;
+            }
+            for c in 0..n {
+                a[r * n + c] -= f * a[col * n + c];
+                work[r * n + c] -= f * work[col * n + c];
             }
         }
     }
+    a.copy_from_slice(&work[..n * n]);
     Ok(())
 }
 
-/// Solves `A X = B` for the `n` by `m` row-major right-hand sides `b`, in place, with `a`
-/// and `pivots` from [`lu_factor`].
-fn lu_solve(a: &[f64], n: usize, pivots: &[usize], b: &mut [f64], m: usize) {
-    for (k, &p) in pivots.iter().enumerate().take(n) {
-        if p != k {
+/// `b <- a b` for the `n` by `n` matrix `a` and the `n` by `m` matrix `b`, row-major.
+fn multiply_in_place(a: &[f64], n: usize, b: &mut [f64], m: usize, work: &mut Vec<f64>) {
+    work.clear();
+    work.resize(n * m, 0.0);
+    for r in 0..n {
+        for k in 0..n {
+            let f = a[r * n + k];
+            if f == 0.0 {
+                continue;
+            }
             for c in 0..m {
-                b.swap(k * m + c, p * m + c);
+                work[r * m + c] += f * b[k * m + c];
             }
         }
     }
-    for r in 1..n {
-        for k in 0..r {
-            let f = a[r * n + k];
-            if f != 0.0 {
-                for c in 0..m {
-                    b[r * m + c] -= f * b[k * m + c];
-                }
-            }
-        }
-    }
-    for r in (0..n).rev() {
-        for k in r + 1..n {
-            let f = a[r * n + k];
-            if f != 0.0 {
-                for c in 0..m {
-                    b[r * m + c] -= f * b[k * m + c];
-                }
-            }
-        }
-        let d = a[r * n + r];
-        for c in 0..m {
-            b[r * m + c] /= d;
-        }
-    }
+    b.copy_from_slice(&work[..n * m]);
 }
 
 #[cfg(test)]
@@ -275,7 +313,8 @@ mod tests {
             .iter()
             .map(|row| row.iter().zip(&want).map(|(a, x)| a * x).sum())
             .collect();
-        system.solve(&mut b).expect("not singular");
+        system.factor().expect("not singular");
+        system.solve(&mut b);
         for (got, want) in b.iter().zip(&want) {
             assert!((got - want).abs() < 1e-12, "{got} against {want}");
         }
@@ -289,6 +328,6 @@ mod tests {
         *system.upper_mut(0, 0, 0) = 1.0;
         *system.lower_mut(0, 0, 0) = 1.0;
         *system.diag_mut(1, 0, 0) = 1.0;
-        assert_eq!(system.solve(&mut [1.0, 1.0]), Err(Singular { block: 1 }));
+        assert_eq!(system.factor(), Err(Singular { block: 1 }));
     }
 }

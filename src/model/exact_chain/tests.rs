@@ -1,13 +1,14 @@
-//! The exact chain against what is known without it: a free chain keeps its momentum,
-//! angular momentum and energy; a pendulum's energy error is of second order in the step;
-//! the joints stay closed; on the floor a chain carries its weight, and slides to rest under
-//! Coulomb's friction.
+//! The exact chain against what is known without it: a free chain keeps its momentum and
+//! energy, and its angular momentum to second order; a pendulum's energy error is of second
+//! order in the step; the joints stay closed; on the floor a chain carries its weight, and
+//! slides to rest under Coulomb's friction.
 
 use super::*;
 
 const TOLERANCE: Tolerance = Tolerance {
     position_m: 1e-12,
     max_iterations: 50,
+    max_turn_rad: 0.3,
 };
 
 /// A straight chain of `n` links of length `l` and mass `m` along +x from the origin, each
@@ -44,8 +45,8 @@ fn momentum(chain: &ExactChain) -> [f64; 3] {
     p
 }
 
-/// A chain of 20 links with a consistent velocity field: spinning as a whole about its
-/// centre, with a flexing wave on top, projected onto the joints by one step of length 0.
+/// A chain of 20 links bent in an arc, every link spinning at its own rate (30 rad/s on
+/// average, 330 at most), each centre's velocity what the joints allow.
 fn spinning_and_flexing() -> ExactChain {
     let (mut bodies, joints) = straight(20, 0.05, 0.01);
     // Each link's angle and spin from a bend, positions from the joints.
@@ -61,7 +62,7 @@ fn spinning_and_flexing() -> ExactChain {
     // velocities follow from the joints, node by node.
     let mut node_v = [0.0, 0.0];
     for (k, b) in bodies.iter_mut().enumerate() {
-        b.spin_rad_s = 3.0 + 40.0 * (k as f64 * 0.7).cos();
+        b.spin_rad_s = 30.0 + 300.0 * (k as f64 * 0.7).cos();
         let half = rotate([0.025, 0.0], b.angle_rad);
         b.velocity_m_s = [
             node_v[0] - b.spin_rad_s * half[1],
@@ -76,8 +77,9 @@ fn spinning_and_flexing() -> ExactChain {
 }
 
 #[test]
-fn a_free_chain_keeps_its_momentum_its_angular_momentum_and_its_energy() {
-    for h in [1e-4, 5e-5] {
+fn a_free_chain_keeps_its_momentum_and_energy_and_its_angular_momentum_to_second_order() {
+    let mut errors = Vec::new();
+    for h in [1e-4, 5e-5, 2.5e-5, 1.25e-5] {
         let mut chain = spinning_and_flexing();
         let (p0, e0) = (momentum(&chain), chain.kinetic_j());
         let mut worst: [f64; 2] = [0.0; 2];
@@ -85,7 +87,8 @@ fn a_free_chain_keeps_its_momentum_its_angular_momentum_and_its_energy() {
         for _ in 0..(0.2 / h) as usize {
             let report = chain.step(h, [0.0, 0.0]).expect("solves");
             assert!(report.converged, "{report:?}");
-            assert!(chain.joint_gap_m() < 1e-11, "gap {}", chain.joint_gap_m());
+            let gap = chain.joint_gap_m();
+            assert!(gap <= chain.position_tolerance_m(), "gap {gap:e}");
             let p = momentum(&chain);
             worst[0] = worst[0].max((p[2] - p0[2]).abs() / p0[2].abs());
             worst[1] = worst[1].max((chain.kinetic_j() / e0 - 1.0).abs());
@@ -99,19 +102,23 @@ fn a_free_chain_keeps_its_momentum_its_angular_momentum_and_its_energy() {
             worst[0],
             worst[1]
         );
-        assert!(
-            worst[0] < 1e-10,
-            "angular momentum drifted by {:e}",
-            worst[0]
-        );
-        assert!(worst[1] < 1e-4, "energy drifted by {:e}", worst[1]);
+        errors.push(worst);
     }
+    // The joints' impulses meet at their anchors, so the angular momentum is kept to the
+    // solve's rounding; the energy's error, the integrator's (RATTLE's), falls as the step
+    // squared (measured: h^2.0 over the three halvings) and is within 1e-4 over the 0.2 s
+    // from 0.04 rad a step on.
+    for e in &errors {
+        assert!(e[0] < 1e-12, "angular momentum drifted by {:e}", e[0]);
+    }
+    let (first, last) = (errors[0][1], errors[errors.len() - 1][1]);
+    let order = (first / last).log2() / (errors.len() - 1) as f64;
+    assert!(order > 1.8, "the energy error's order {order:.2}");
+    assert!(errors[2][1] < 1e-4, "energy drifted by {:e}", errors[2][1]);
 }
 
 /// A chain of 8 links pinned at one end, released horizontal under gravity: returns the
-/// largest error of its energy over 0.5 s, relative to the most kinetic energy it had. The
-/// step's velocity is the motion's over the step (the positions move by it), so the energy
-/// at a step's end is read with the mean of the velocities of the steps either side.
+/// largest error of its energy over 0.5 s, relative to the most kinetic energy it had.
 fn pendulum_energy_error(h: f64) -> f64 {
     let (bodies, joints) = straight(8, 0.05, 0.01);
     let pin = Pin {
@@ -120,33 +127,20 @@ fn pendulum_energy_error(h: f64) -> f64 {
     };
     let mut chain = ExactChain::new(bodies, joints, Some(pin), TOLERANCE);
     let g = 9.81;
-    let potential = |c: &ExactChain| {
-        c.bodies()
-            .iter()
-            .map(|b| b.mass_kg * g * b.position_m[1])
-            .sum::<f64>()
+    let energy = |c: &ExactChain| {
+        c.kinetic_j()
+            + c.bodies()
+                .iter()
+                .map(|b| b.mass_kg * g * b.position_m[1])
+                .sum::<f64>()
     };
-    let e0 = potential(&chain);
+    let e0 = energy(&chain);
     let (mut worst, mut most) = (0.0_f64, 0.0_f64);
     for _ in 0..(0.5 / h).round() as usize {
-        let (before, p) = (chain.bodies().to_vec(), potential(&chain));
         let report = chain.step(h, [0.0, -g]).expect("solves");
         assert!(report.converged && report.joint_gap_m < 1e-11, "{report:?}");
-        let kinetic: f64 = before
-            .iter()
-            .zip(chain.bodies())
-            .map(|(a, b)| {
-                let mut mean = *b;
-                mean.velocity_m_s = [
-                    0.5 * (a.velocity_m_s[0] + b.velocity_m_s[0]),
-                    0.5 * (a.velocity_m_s[1] + b.velocity_m_s[1]),
-                ];
-                mean.spin_rad_s = 0.5 * (a.spin_rad_s + b.spin_rad_s);
-                mean.kinetic_j()
-            })
-            .sum();
-        worst = worst.max((kinetic + p - e0).abs());
-        most = most.max(kinetic);
+        worst = worst.max((energy(&chain) - e0).abs());
+        most = most.max(chain.kinetic_j());
     }
     worst / most
 }

@@ -20,6 +20,7 @@ const EXACT_TOLERANCE: f64 = 1e-3;
 const SOLVE: Tolerance = Tolerance {
     position_m: 1e-12,
     max_iterations: 50,
+    max_turn_rad: 0.3,
 };
 
 /// A small world of bars on the floor `y = 0`, stepped by the exact chain.
@@ -134,11 +135,18 @@ impl ExactBench {
                     normal: v(c.normal_n_s),
                     friction: v(c.friction_n_s),
                     arm: v(c.arm_m),
+                    work_j: Some(c.work_j),
                 };
                 (c.body, impulse)
             })
             .collect();
-        let w = step_work(&moved, &floor, Vector::new(0.0, -g), dt);
+        let w = step_work(
+            &moved,
+            &floor,
+            Vector::new(0.0, -g),
+            dt,
+            Some(report.gravity_work_j),
+        );
         self.booked.normal_j += w.normal_j;
         self.booked.friction_j += w.friction_j;
         self.booked.joints_j += w.joints_j;

@@ -1,0 +1,224 @@
+//! The final bang on the exact chain (`solver.bang_engine = "exact"`): each step the moving
+//! pieces are handed to [`ExactChain`] (their mass, inertia, pose, velocity and nodes, the
+//! joints' anchors, the pin, the floor), stepped there instead of in the engine, and handed
+//! back; the engine's bodies stay the pieces' record, so freezing, pins, observations and
+//! frames read them as in the engine's bang. The chain is rebuilt from them when the moving
+//! pieces change (a freeze), and refreshed from them otherwise.
+
+use super::*;
+use crate::model::exact_chain::{
+    self, Body, ExactChain, Floor, Joint, Pin, SolveStats, StepError, Tolerance,
+};
+
+/// The exact chain of the bang's moving pieces, and how its steps went.
+pub(in crate::model) struct ExactBang {
+    chain: ExactChain,
+    /// The pieces' bodies along the chain, and the pin's anchors (world, body frame), as the
+    /// chain was built from them.
+    bodies: Vec<RigidBodyHandle>,
+    pin: Option<(Vector, Vector)>,
+    /// Each body's centre of mass in its own frame (m).
+    centres: Vec<Vector>,
+    /// How the steps were solved.
+    pub(in crate::model) stats: SolveStats,
+    /// The deepest a contact point ended below the floor in the last step (m).
+    pub(in crate::model) penetration_m: f64,
+    /// The failure that stopped it, if any.
+    pub(in crate::model) failed: Option<StepError>,
+    /// Gravity's work over the last step (J).
+    pub(in crate::model) gravity_work_j: f64,
+}
+
+impl Model {
+    /// One step of the bang on the exact chain; returns the floor's impulses, each beside the
+    /// body it acted on. A failed solve leaves the pieces where they were and is kept for
+    /// [`Model::health`].
+    pub(in crate::model) fn step_exact(
+        &mut self,
+        dt: f64,
+    ) -> Vec<(RigidBodyHandle, work::FloorImpulse)> {
+        self.sync_exact();
+        let gravity = self.world.gravity;
+        let Some(exact) = self.exact.as_mut() else {
+            return Vec::new();
+        };
+        match exact.chain.step(dt, [gravity.x, gravity.y]) {
+            Ok(report) => {
+                exact.stats.add(&report);
+                exact.penetration_m = report.penetration_m;
+                exact.gravity_work_j = report.gravity_work_j;
+            }
+            Err(e) => {
+                exact.failed = Some(e);
+                return Vec::new();
+            }
+        }
+        for ((b, &h), &c) in exact
+            .chain
+            .bodies()
+            .iter()
+            .zip(&exact.bodies)
+            .zip(&exact.centres)
+        {
+            let body = &mut self.world.bodies[h];
+            let arm = rotate([c.x, c.y], b.angle_rad);
+            let origin = Vector::new(b.position_m[0] - arm[0], b.position_m[1] - arm[1]);
+            body.set_position(Pose::new(origin, b.angle_rad), false);
+            body.set_linvel(Vector::new(b.velocity_m_s[0], b.velocity_m_s[1]), false);
+            body.set_angvel(b.spin_rad_s, false);
+        }
+        self.bang.solve = exact.stats;
+        exact
+            .chain
+            .contacts()
+            .iter()
+            .map(|c| {
+                let v = |p: [f64; 2]| Vector::new(p[0], p[1]);
+                let impulse = work::FloorImpulse {
+                    normal: v(c.normal_n_s),
+                    friction: v(c.friction_n_s),
+                    arm: v(c.arm_m),
+                    work_j: Some(c.work_j),
+                };
+                (exact.bodies[c.body], impulse)
+            })
+            .collect()
+    }
+
+    /// The pin of the first moving piece, if it has one: its anchor in the world and in the
+    /// piece's frame.
+    fn first_pin(&self) -> Option<(Vector, Vector)> {
+        let first = self.chain.free.front()?;
+        self.world
+            .impulse_joints
+            .joints_between(self.ground, first.body)
+            .map(|(_, j)| (j.data.local_anchor1(), j.data.local_anchor2()))
+            .last()
+    }
+
+    /// Brings the exact chain up to the engine's bodies: rebuilt if the moving pieces or the
+    /// pin changed, else each body's state refreshed.
+    fn sync_exact(&mut self) {
+        let handles: Vec<RigidBodyHandle> = self.chain.free.iter().map(|p| p.body).collect();
+        let pin = self.first_pin();
+        let (stats, failed) = match &mut self.exact {
+            Some(ex) if ex.bodies == handles && ex.pin == pin => {
+                for ((b, &h), &c) in ex
+                    .chain
+                    .bodies_mut()
+                    .iter_mut()
+                    .zip(&handles)
+                    .zip(&ex.centres)
+                {
+                    *b = exact_body(&self.world.bodies[h], c);
+                }
+                return;
+            }
+            Some(ex) => (ex.stats, ex.failed),
+            None => (SolveStats::default(), None),
+        };
+        let mut built = self.build_exact(handles, pin);
+        built.stats = stats;
+        built.failed = failed;
+        self.exact = Some(built);
+    }
+
+    /// The exact chain of the moving pieces `handles` (those of `chain.free`), pinned by
+    /// `pin`, on the floor.
+    fn build_exact(
+        &self,
+        handles: Vec<RigidBodyHandle>,
+        pin: Option<(Vector, Vector)>,
+    ) -> ExactBang {
+        let free = &self.chain.free;
+        let centres: Vec<Vector> = handles
+            .iter()
+            .map(|&h| {
+                self.world.bodies[h]
+                    .mass_properties()
+                    .local_mprops
+                    .local_com
+            })
+            .collect();
+        let bodies: Vec<Body> = handles
+            .iter()
+            .zip(&centres)
+            .map(|(&h, &c)| exact_body(&self.world.bodies[h], c))
+            .collect();
+        let at = |v: Vector| [v.x, v.y];
+        let joints: Vec<Joint> = (1..free.len())
+            .map(|i| Joint {
+                prev: at(self.chain.local[free[i - 1].last][1] - centres[i - 1]),
+                next: at(self.chain.local[free[i].first][0] - centres[i]),
+            })
+            .collect();
+        let shortest = free
+            .iter()
+            .map(|p| {
+                self.chain.links[p.first..=p.last]
+                    .iter()
+                    .map(|l| l.length_m)
+                    .sum::<f64>()
+            })
+            .fold(f64::INFINITY, f64::min);
+        let mut chain = ExactChain::new(
+            bodies,
+            joints,
+            pin.map(|(world, local)| Pin {
+                anchor: at(local - centres[0]),
+                at_m: at(world),
+            }),
+            Tolerance {
+                // Twice the step rule's turn: room for an impact's spin-up.
+                max_turn_rad: 2.0 * self.settings.bang_step_rad,
+                ..exact_chain::tolerance_for(shortest)
+            },
+        );
+        // Each piece touches the floor at its nodes; a node two pieces share (or the pin's)
+        // belongs to the piece before it.
+        let points: Vec<Vec<[f64; 2]>> = free
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| {
+                let skip = usize::from(i > 0 || pin.is_some());
+                self.piece_nodes(p)
+                    .skip(skip)
+                    .map(|n| at(n - centres[i]))
+                    .collect()
+            })
+            .collect();
+        let floor_y = self.world.colliders[self.floor].translation().y;
+        let floor = Floor {
+            point_m: [0.0, floor_y],
+            normal: [0.0, 1.0],
+            friction: self.settings.friction,
+        };
+        chain.set_floor(floor, &points);
+        ExactBang {
+            chain,
+            bodies: handles,
+            pin,
+            centres,
+            stats: SolveStats::default(),
+            penetration_m: 0.0,
+            failed: None,
+            gravity_work_j: 0.0,
+        }
+    }
+}
+
+/// An engine body as the exact chain holds it, about its centre of mass `centre` (its own
+/// frame).
+fn exact_body(body: &RigidBody, centre: Vector) -> Body {
+    let pose = body.position();
+    let com = pose.transform_point(centre);
+    let v = body.linvel();
+    Body {
+        mass_kg: body.mass(),
+        inertia_kg_m2: body.mass_properties().effective_angular_inertia(),
+        position_m: [com.x, com.y],
+        angle_rad: body.rotation().angle(),
+        velocity_m_s: [v.x, v.y],
+        spin_rad_s: body.angvel(),
+    }
+}
