@@ -74,6 +74,49 @@ fn onto_a_table_the_ledger_closes() {
     assert!((parts - lost).abs() < 1e-9 * lost);
 }
 
+/// On the exact chain, with no floor, the targets at 200 links: the tip's times
+/// within 0.1 % of the closed form at x/L = 0.25-0.9, the joints' work at most 0.1 % of the
+/// energy released by 0.9 L (measured: within 0.02 %, and 0.018 %: docs/folded-chain.md).
+#[test]
+fn on_the_exact_chain_the_free_fall_follows_the_closed_form_to_a_tenth_of_a_percent() {
+    let scene = chain(&[("chain.links", "200"), ("solver.joints", "exact")]);
+    let r = run_chain(&scene, &mut |_| Ok(()), &AtomicBool::new(false)).unwrap();
+    assert_eq!(r.end, ChainEnd::TipFraction);
+    for c in &r.crossings[..4] {
+        let err = c.t_s / c.t_closed_s - 1.0;
+        assert!(err.abs() < 0.001, "t({}) off by {err}", c.fraction);
+    }
+    let at_09 = &r.crossings[3];
+    assert!(at_09.joints_j.abs() / at_09.released_j < 0.001, "{at_09:?}");
+    assert_eq!(r.solve.missed_steps, 0, "{:?}", r.solve);
+}
+
+/// On the exact chain, onto a table at 50 links: the landing is the floor's, the numerical
+/// part at most 1 % of the energy released (8 pin heights: 0.05 %, docs/folded-chain.md),
+/// and the ledger closes.
+#[test]
+fn on_the_exact_chain_a_landing_is_the_floor_s() {
+    let scene = chain(&[
+        ("chain.links", "50"),
+        ("solver.joints", "exact"),
+        ("floor.enabled", "true"),
+        ("pin.height_m", "0.75"),
+        ("stop.max_time_s", "0.5"),
+    ]);
+    let r = run_chain(&scene, &mut |_| Ok(()), &AtomicBool::new(false)).unwrap();
+    let l = r.ledger;
+    let lost = r.released_j - r.kinetic_j;
+    assert!(lost > 0.5 * r.released_j, "{r:?}");
+    let numerical = (l.joints_j.abs() + l.residual_j.abs()) / r.released_j;
+    assert!(
+        numerical < 0.01,
+        "numerical {:.3} % {l:?}",
+        100.0 * numerical
+    );
+    let parts = l.floor_normal_j + l.floor_friction_j + l.joints_j + l.residual_j;
+    assert!((parts - lost).abs() < 1e-9 * lost);
+}
+
 #[test]
 fn bad_input_exits_2_naming_key_value_and_rule() {
     let dir = tempfile::tempdir().unwrap();

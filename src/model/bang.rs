@@ -177,11 +177,11 @@ impl Model {
                 Some((i, c))
             })
             .collect();
-        let gravity_work = self
-            .exact
-            .as_ref()
-            .filter(|_| self.on_exact_chain())
-            .map(|e| e.gravity_work_j);
+        let exact = self.exact.as_ref().filter(|_| self.on_exact_chain());
+        let gravity_work = exact.map(|e| e.gravity_work_j);
+        // What the exact chain took when it made the joints rigid (at the release, and at a
+        // freeze's new pin) is the model's discard, as joining the pieces is: not the joints'.
+        let caught = exact.map_or(0.0, |e| e.caught_j);
         let work = work::step_work(&bodies, &floor, self.world.gravity, dt, gravity_work);
         let impulse: f64 = floor.iter().map(|(_, c)| c.normal.length()).sum();
         // Potential energy above lying flat on the floor: the weight across the floor times
@@ -211,7 +211,8 @@ impl Model {
         let b = &mut self.bang;
         b.ledger.floor_normal_j -= work.normal_j;
         b.ledger.floor_friction_j -= work.friction_j;
-        b.ledger.joints_j -= work.joints_j;
+        b.ledger.joints_j -= work.joints_j + caught;
+        b.ledger.freeze_j += caught;
         b.ledger.residual_j += lost_j + work.normal_j + work.friction_j + work.joints_j;
         b.top_speed_m_s = b.top_speed_m_s.max(top_speed);
         b.floor_impulse_n_s += impulse;

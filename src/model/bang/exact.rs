@@ -27,6 +27,8 @@ pub(in crate::model) struct ExactBang {
     pub(in crate::model) failed: Option<StepError>,
     /// Gravity's work over the last step (J).
     pub(in crate::model) gravity_work_j: f64,
+    /// What the joints took in the last step when they were made rigid (J).
+    pub(in crate::model) caught_j: f64,
 }
 
 impl Model {
@@ -47,6 +49,7 @@ impl Model {
                 exact.stats.add(&report);
                 exact.penetration_m = report.penetration_m;
                 exact.gravity_work_j = report.gravity_work_j;
+                exact.caught_j = report.caught_j;
             }
             Err(e) => {
                 exact.failed = Some(e);
@@ -203,6 +206,7 @@ impl Model {
             penetration_m: 0.0,
             failed: None,
             gravity_work_j: 0.0,
+            caught_j: 0.0,
         }
     }
 }

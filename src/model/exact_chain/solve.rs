@@ -39,6 +39,8 @@ pub(super) struct Scratch {
     x: Vec<f64>,
     /// The bodies before the step, to restore on a failure.
     saved: Vec<super::Body>,
+    /// Each contact point's height above the floor at the step's start (m).
+    start_gaps: Vec<f64>,
 }
 
 /// The step of [`ExactChain::step`].
@@ -76,11 +78,16 @@ fn stages(
             ..StepReport::default()
         }
     };
-    record_contacts(chain, s);
+    let start_floor = record_contacts(chain, s);
+    report.joint_work_j[0] = kinetic(chain, &s.v) - kinetic(chain, &s.free) - start_floor;
+    if chain.fresh {
+        report.caught_j = -report.joint_work_j[0];
+    }
     s.after_impulses.clone_from(&s.v);
     let (iterations, closed) = drift(chain, s, h, gravity)?;
     report.iterations += iterations;
     report.converged &= closed;
+    report.drift_closed = closed;
     report.pieces = 1;
     report.max_turn_rad = s.drift.iter().map(|v| (h * v[2]).abs()).fold(0.0, f64::max);
     // Move to the end, then the second half kick, and the impulses there.
@@ -89,15 +96,20 @@ fn stages(
         b.angle_rad += h * v[2];
     }
     s.start_pose.take(chain, None);
-    project_out(chain, s)?;
+    report.converged &= project_out(chain, s)?;
     report.joint_gap_m = s.start_pose.joint_gap(chain);
     s.free = kicked(&s.drift, gravity, 0.5 * h);
-    report.gravity_work_j = gravity_work(chain, s, h, gravity);
+    let [first_kick, second_kick] = gravity_work(chain, s, h, gravity);
+    report.gravity_work_j = first_kick + second_kick;
+    report.joint_work_j[1] =
+        kinetic(chain, &s.drift) - kinetic(chain, &s.after_impulses) - first_kick;
     modes::gather(chain, s, Impulses::End);
     let end = impulses(chain, s, Impulses::End)?;
     report.iterations += end.iterations;
     report.converged &= end.converged;
-    record_contacts(chain, s);
+    let end_floor = record_contacts(chain, s);
+    report.joint_work_j[2] =
+        kinetic(chain, &s.v) - kinetic(chain, &s.drift) - second_kick - end_floor;
     if !s.v.iter().flatten().all(|x| x.is_finite()) {
         return Err(StepError::NonFinite);
     }
@@ -163,31 +175,36 @@ fn drift(
 /// Moves the bodies, not their velocities, out of the floor where the drift took a contact
 /// point deeper than the slop (a point moves on an arc over the step, not on its
 /// velocity's line), keeping the joints closed: the mass-weighted least move, by the same
-/// block-tridiagonal solve, a few times over if the move takes other points below. Pushing
-/// them out by velocity instead would add their depth over the step to their speed.
-fn project_out(chain: &mut ExactChain, s: &mut Scratch) -> Result<(), StepError> {
+/// block-tridiagonal solve, a few times over if the move takes other points below; whether
+/// it converged. Pushing them out by velocity instead would add their depth over the step
+/// to their speed.
+fn project_out(chain: &mut ExactChain, s: &mut Scratch) -> Result<bool, StepError> {
     let Some(floor) = chain.floor else {
-        return Ok(());
+        return Ok(true);
     };
     let tol = position_tolerance(chain);
     let deepest = modes::SLOP * tol;
-    let mut deep = Vec::new();
+    // (body, point, the depth it may keep): points once moved stay in the projection until
+    // it ends. A point the step began with below the floor (the engine's laid tape sits its
+    // inset below it) may stay as deep, no deeper.
+    let mut deep: Vec<(usize, [f64; 2], f64)> = Vec::new();
     for _ in 0..chain.tolerance.max_iterations {
-        // Points once moved out stay in the projection, held on the floor, until it ends.
         for i in 0..chain.bodies.len() {
-            for &local in &chain.vertices[chain.vertex_at[i]..chain.vertex_at[i + 1]] {
-                let below = floor.gap(s.start_pose.point(i, local)) < -deepest;
-                if below && !deep.contains(&(i, local)) {
-                    deep.push((i, local));
+            for v in chain.vertex_at[i]..chain.vertex_at[i + 1] {
+                let local = chain.vertices[v];
+                let floor_at = s.start_gaps[v].min(0.0);
+                let below = floor.gap(s.start_pose.point(i, local)) < floor_at - deepest;
+                if below && !deep.iter().any(|d| d.0 == i && d.1 == local) {
+                    deep.push((i, local, floor_at));
                 }
             }
         }
-        deep.sort_by_key(|&(i, _)| i);
+        deep.sort_by_key(|d| d.0);
         let closed = deep
             .iter()
-            .all(|&(i, local)| floor.gap(s.start_pose.point(i, local)).abs() <= tol);
+            .all(|&(i, local, at)| (floor.gap(s.start_pose.point(i, local)) - at).abs() <= tol);
         if closed && s.start_pose.joint_gap(chain) <= tol {
-            return Ok(());
+            return Ok(true);
         }
         rows::build_projection(chain, s, &deep);
         rows::solve(chain, s)?;
@@ -203,7 +220,7 @@ fn project_out(chain: &mut ExactChain, s: &mut Scratch) -> Result<(), StepError>
         }
         s.start_pose.take(chain, None);
     }
-    Ok(())
+    Ok(false)
 }
 
 /// `v` with gravity's impulse over `dt` added.
@@ -213,18 +230,31 @@ fn kicked(v: &[[f64; 3]], gravity: [f64; 2], dt: f64) -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// Gravity's work over the step, each half kick's impulse times the mean velocity over it
-/// (J); `s.free` holds the velocity after the second.
-fn gravity_work(chain: &ExactChain, s: &Scratch, h: f64, gravity: [f64; 2]) -> f64 {
-    let mut work = 0.0;
+/// Gravity's work in each half kick, its impulse times the mean velocity over it (J):
+/// the first from the impulses' velocity to the drift's, the second from the drift's to
+/// `s.free`.
+fn gravity_work(chain: &ExactChain, s: &Scratch, h: f64, gravity: [f64; 2]) -> [f64; 2] {
+    let mut work = [0.0; 2];
     for (i, b) in chain.bodies.iter().enumerate() {
         let (a, d, e) = (s.after_impulses[i], s.drift[i], s.free[i]);
         let mean = |p: [f64; 3], q: [f64; 3]| [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])];
-        for m in [mean(a, d), mean(d, e)] {
-            work += 0.5 * h * b.mass_kg * (gravity[0] * m[0] + gravity[1] * m[1]);
+        for (w, m) in work.iter_mut().zip([mean(a, d), mean(d, e)]) {
+            *w += 0.5 * h * b.mass_kg * (gravity[0] * m[0] + gravity[1] * m[1]);
         }
     }
     work
+}
+
+/// The chain's kinetic energy at the velocities `v` (J).
+fn kinetic(chain: &ExactChain, v: &[[f64; 3]]) -> f64 {
+    chain
+        .bodies
+        .iter()
+        .zip(v)
+        .map(|(b, v)| {
+            0.5 * b.mass_kg * (v[0] * v[0] + v[1] * v[1]) + 0.5 * b.inertia_kg_m2 * v[2] * v[2]
+        })
+        .sum()
 }
 
 /// The chain's position tolerance, no finer than 4096 roundings of its largest coordinate.
@@ -253,13 +283,22 @@ fn prepare(chain: &ExactChain, s: &mut Scratch, gravity: [f64; 2]) {
     s.v.clone_from(&s.free);
     s.gravity = gravity;
     s.start_pose.take(chain, None);
+    s.start_gaps.clear();
+    if let Some(floor) = chain.floor {
+        for i in 0..chain.bodies.len() {
+            for &local in &chain.vertices[chain.vertex_at[i]..chain.vertex_at[i + 1]] {
+                s.start_gaps.push(floor.gap(s.start_pose.point(i, local)));
+            }
+        }
+    }
 }
 
 /// Keeps the contacts' impulses of the stage just solved, their work (each times the mean
 /// velocity of its point over the stage, `s.free` before it and `s.v` after), and their
-/// modes for the next stage's first guess.
-fn record_contacts(chain: &mut ExactChain, s: &Scratch) {
-    let Some(floor) = chain.floor else { return };
+/// impulses as the next stage's first guess. Returns their work (J).
+fn record_contacts(chain: &mut ExactChain, s: &Scratch) -> f64 {
+    let Some(floor) = chain.floor else { return 0.0 };
+    let mut total = 0.0;
     chain.warm.fill([0.0; 2]);
     let (n, t) = (floor.normal, floor.tangent());
     for c in &s.candidates {
@@ -270,13 +309,16 @@ fn record_contacts(chain: &mut ExactChain, s: &Scratch) {
         let (before, after) = (s.free[c.body], s.v[c.body]);
         let mean = |j: [f64; 3]| 0.5 * (rows::dot3(j, before) + rows::dot3(j, after));
         let (dn, dt) = (rows::along(n, c.arm), rows::along(t, c.arm));
+        let work_j = [c.normal * mean(dn), c.tangent * mean(dt)];
+        total += work_j[0] + work_j[1];
         chain.contacts.push(ContactImpulse {
             body: c.body,
             vertex: c.vertex - chain.vertex_at[c.body],
             normal_n_s: [n[0] * c.normal, n[1] * c.normal],
             friction_n_s: [t[0] * c.tangent, t[1] * c.tangent],
             arm_m: c.arm,
-            work_j: [c.normal * mean(dn), c.tangent * mean(dt)],
+            work_j,
         });
     }
+    total
 }

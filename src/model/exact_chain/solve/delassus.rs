@@ -17,12 +17,18 @@ use super::super::{ExactChain, StepError, StepReport};
 use super::rows::{self, Stage, along, dot3};
 use super::{Scratch, position_tolerance};
 
+/// The contacts are solved when a sweep moves none of their velocities by more than this
+/// fraction of the fastest of them before the stage (or by the position tolerance over the
+/// step, if that is wider): the work a residual that small can do is below the ledger's
+/// rounding of the bang.
+pub(super) const SPEED_TOLERANCE: f64 = 1e-6;
+
 /// The most Gauss-Seidel sweeps a stage may take.
 const MAX_SWEEPS: u32 = 1000;
 
 /// Solves the stage's velocity, from `s.free` into `s.v` (see the module's doc). Its
 /// iterations are its sweeps; it has converged when a sweep moved no contact's velocity by
-/// more than the tolerance over the step.
+/// more than the tolerance ([`SPEED_TOLERANCE`]).
 pub(super) fn solve(chain: &mut ExactChain, s: &mut Scratch) -> Result<StepReport, StepError> {
     let tol_speed = position_tolerance(chain) / s.h;
     s.base.clone_from(&s.free);
@@ -63,7 +69,11 @@ pub(super) fn solve(chain: &mut ExactChain, s: &mut Scratch) -> Result<StepRepor
             .collect();
         if !engaged.is_empty() {
             let (w, u0) = delassus(chain, s, &engaged, &held_v);
-            let (sweeps, converged) = gauss_seidel(chain, s, &engaged, &w, &u0, &mut p, tol_speed);
+            // The contacts' velocities to the position tolerance over the step, or to
+            // SPEED_TOLERANCE of the fastest of them, whichever is wider.
+            let scale = u0.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+            let tol = tol_speed.max(SPEED_TOLERANCE * scale);
+            let (sweeps, converged) = gauss_seidel(chain, s, &engaged, &w, &u0, &mut p, tol);
             report.iterations += sweeps;
             report.converged = converged;
         } else {

@@ -1,13 +1,14 @@
 //! The rows of a step's constraints and their block-tridiagonal system: each row a
 //! Jacobian `k` (what it holds) and an impulse direction `d` (along which it pushes) on one
-//! or two bodies, `k M^-1 d^T x = rhs`; body `i`'s block holds the pin's rows (body 0), its
-//! contacts' rows and the joint to body `i + 1`, so a contact touches one block and a joint
-//! two neighbours. Three sets of rows, one per stage of the step (`super`'s doc):
+//! or two bodies, `k M^-1 d^T x = rhs`; body `i`'s block holds the pin's rows (body 0), the
+//! joint to body `i + 1` and, in a position projection, its points moved out of the floor,
+//! so a joint touches two neighbouring blocks. The sets of rows (`super`'s doc):
 //!
 //! - the impulses at the step's start or end: joints and pin held (`G v' = 0`) at that pose
 //!   (`k = d`), the contacts solved against them (`super::delassus`);
 //! - the drift: each joint closed at the step's end (`g(q + h v) = 0`), its Jacobian at the
-//!   iterate's predicted pose and its impulse along the start's (Newton's method, SHAKE).
+//!   iterate's predicted pose and its impulse along the start's (Newton's method, SHAKE);
+//! - the projection: joints closed and points out of the floor by a move of the bodies.
 
 use super::super::blocks::Singular;
 use super::super::{ExactChain, REGULARISATION, StepError};
@@ -150,8 +151,13 @@ pub(super) fn build(chain: &ExactChain, s: &mut Scratch, stage: Stage) {
 
 /// The rows that move the bodies (no velocity) onto the joints and out of the floor at
 /// `s.start_pose`: each joint's and the pin's gap, and each point of `deep` (body, point in
-/// its axes) its depth below the floor; `x` is then the move's multipliers.
-pub(super) fn build_projection(chain: &ExactChain, s: &mut Scratch, deep: &[(usize, [f64; 2])]) {
+/// its axes, the height it is to be at) its distance from that height; `x` is then the
+/// move's multipliers.
+pub(super) fn build_projection(
+    chain: &ExactChain,
+    s: &mut Scratch,
+    deep: &[(usize, [f64; 2], f64)],
+) {
     s.rows.clear();
     s.sizes.clear();
     let floor = chain.floor;
@@ -177,7 +183,7 @@ pub(super) fn build_projection(chain: &ExactChain, s: &mut Scratch, deep: &[(usi
             let a = s.start_pose.arm(i, deep[next].1);
             let dn = along(floor.normal, a);
             let mut row = one(i, dn, dn);
-            row.rhs = -floor.gap(s.start_pose.point(i, deep[next].1));
+            row.rhs = deep[next].2 - floor.gap(s.start_pose.point(i, deep[next].1));
             row.reg = REGULARISATION * weighted(dn, s.inv[i], dn);
             s.rows.push(row);
             next += 1;
