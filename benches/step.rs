@@ -3,12 +3,18 @@
 //! resolution set by override at run time; building a model is not timed, and a model is
 //! rebuilt (untimed) whenever its rolling phase ends.
 //!
+//! And one step of the exact chain (`exact_chain/<case>/<pieces>`, its throughput in pieces):
+//! a free chain bent and spinning (`free`, at 100, 1,000 and 10,000 pieces), and the same
+//! chain lying on a floor, sliding (`on-floor`, a contact at every node, at 100 and 1,000). The chain is
+//! rebuilt (untimed) every 200 steps, so it stays in the state it was built in.
+//!
 //! `cargo bench --bench step` (CI only compiles this file).
 
 use std::time::{Duration, Instant};
 
-use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
+use uncoil::model::exact_chain::{Body, ExactChain, Floor, Joint, tolerance_for};
 use uncoil::model::{Model, Phase};
 use uncoil::scene::Scene;
 use uncoil::scene::overrides::{Override, scene_file_with_overrides};
@@ -58,5 +64,101 @@ fn step(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, step);
+/// A chain of `n` links of 1 mm and 1 g along a gentle wave, each spinning a little and the
+/// centres moving as the joints allow; on a floor (`on_floor`), laid along it and sliding.
+fn exact_chain(n: usize, on_floor: bool) -> ExactChain {
+    let (l, m) = (1e-3, 1e-3);
+    let mut bodies = Vec::with_capacity(n);
+    let (mut node, mut node_v) = ([0.0, 0.0], [0.3, 0.0]);
+    for k in 0..n {
+        let angle = if on_floor {
+            0.0
+        } else {
+            0.3 * (k as f64 * 0.05).sin()
+        };
+        let spin = if on_floor {
+            0.0
+        } else {
+            5.0 * (k as f64 * 0.11).cos()
+        };
+        let half = [0.5 * l * angle.cos(), 0.5 * l * angle.sin()];
+        bodies.push(Body {
+            mass_kg: m,
+            inertia_kg_m2: m * l * l / 12.0,
+            position_m: [node[0] + half[0], node[1] + half[1]],
+            angle_rad: angle,
+            velocity_m_s: [node_v[0] - spin * half[1], node_v[1] + spin * half[0]],
+            spin_rad_s: spin,
+        });
+        node = [node[0] + 2.0 * half[0], node[1] + 2.0 * half[1]];
+        node_v = [
+            node_v[0] - 2.0 * spin * half[1],
+            node_v[1] + 2.0 * spin * half[0],
+        ];
+    }
+    let joints = vec![
+        Joint {
+            prev: [0.5 * l, 0.0],
+            next: [-0.5 * l, 0.0],
+        };
+        n - 1
+    ];
+    let mut chain = ExactChain::new(bodies, joints, None, tolerance_for(l));
+    if on_floor {
+        let points: Vec<Vec<[f64; 2]>> = (0..n)
+            .map(|k| {
+                if k == 0 {
+                    vec![[-0.5 * l, 0.0], [0.5 * l, 0.0]]
+                } else {
+                    vec![[0.5 * l, 0.0]]
+                }
+            })
+            .collect();
+        let floor = Floor {
+            point_m: [0.0, 0.0],
+            normal: [0.0, 1.0],
+            friction: 0.5,
+        };
+        chain.set_floor(floor, &points);
+    }
+    chain
+}
+
+fn exact_chain_step(c: &mut Criterion) {
+    let mut group = c.benchmark_group("exact_chain");
+    group.measurement_time(Duration::from_secs(3));
+    group.warm_up_time(Duration::from_millis(500));
+    group.sample_size(10);
+    // On the floor every node is a contact, and the contacts cost O(k N) a step (their
+    // Delassus matrix): 10,000 would take minutes a step.
+    for (case, on_floor, sizes) in [
+        ("free", false, &[100, 1_000, 10_000][..]),
+        ("on-floor", true, &[100, 1_000][..]),
+    ] {
+        for &n in sizes {
+            group.throughput(Throughput::Elements(n as u64));
+            let mut chain = exact_chain(n, on_floor);
+            let mut taken = 0;
+            group.bench_function(BenchmarkId::new(case, n), |b| {
+                b.iter_custom(|iters| {
+                    let mut spent = Duration::ZERO;
+                    for _ in 0..iters {
+                        if taken == 200 {
+                            chain = exact_chain(n, on_floor);
+                            taken = 0;
+                        }
+                        let start = Instant::now();
+                        std::hint::black_box(chain.step(1e-4, [0.0, -9.81]).expect("solves"));
+                        spent += start.elapsed();
+                        taken += 1;
+                    }
+                    spent
+                });
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, step, exact_chain_step);
 criterion_main!(benches);
