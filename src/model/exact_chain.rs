@@ -27,8 +27,15 @@
 //! drift would: its joints close over the step with the spins of after the impact). The
 //! floor's contacts act in stages 1 and 3: inelastic, with Coulomb friction, each point's
 //! normal velocity at least its target (stage 1: closing its gap over the step and meeting
-//! gravity's half kick; stage 3: not approaching), solved by projected Gauss-Seidel against
-//! the chain's exact response (`solve/delassus.rs`, Baraff 1996, section 8). A contact point
+//! gravity's half kick; stage 3: not approaching). A contact's rows touch only its own body,
+//! so they join the banded system: each point off, sticking or sliding, the modes changed
+//! where a solve breaks a condition (an active set, `solve/active.rs`; Júdice and Pires'
+//! block pivoting, then Murty's single pivots), each pass one direct solve linear in the
+//! bodies and contacts. Where the modes do not settle, the stage's contacts are solved by
+//! projected Gauss-Seidel against the chain's exact response (`solve/delassus.rs`, Baraff
+//! 1996, section 8; `O(k N)` for `k` contacts). Either way the contacts' impulses act from
+//! the velocity with the joints held, so their work is booked apart from the joints'
+//! ([`ContactImpulse::work_j`]). A contact point
 //! the drift takes below the floor (it moves on an arc, not on its velocity's line) is moved
 //! out by position, with the joints kept closed. Each impulse's work is measured over its
 //! own stage ([`ContactImpulse::work_j`], [`StepReport::gravity_work_j`]).
@@ -43,7 +50,10 @@
 //! (the block-tridiagonal solve of a loop-free chain, contacts as auxiliary constraints); H.
 //! C. Andersen, "Rattle: a velocity version of the Shake algorithm", J. Comput. Phys. 52, 24
 //! (1983); J.-P. Ryckaert, G. Ciccotti and H. J. C. Berendsen, J. Comput. Phys. 23, 327
-//! (1977) (SHAKE).
+//! (1977) (SHAKE); J. J. Júdice and F. M. Pires, "A block principal pivoting algorithm for
+//! large-scale strictly monotone linear complementarity problems", Comput. Oper. Res. 21, 587
+//! (1994); K. G. Murty, "Note on a Bard-type scheme for solving the complementarity
+//! problem", Opsearch 11, 123 (1974).
 
 mod blocks;
 

@@ -5,6 +5,7 @@
 
 use super::{ContactImpulse, ExactChain, StepError, StepReport};
 
+mod active;
 mod delassus;
 mod modes;
 mod rows;
@@ -25,6 +26,9 @@ pub(super) struct Scratch {
     base: Vec<[f64; 3]>,
     /// The iterate's velocity.
     v: Vec<[f64; 3]>,
+    /// The stage's velocity with the joints held and no contact: the contacts' impulses act
+    /// from it.
+    held: Vec<[f64; 3]>,
     /// The velocity after the impulses at the start, and over the drift.
     after_impulses: Vec<[f64; 3]>,
     drift: Vec<[f64; 3]>,
@@ -35,6 +39,8 @@ pub(super) struct Scratch {
     end_pose: Pose,
     candidates: Vec<modes::Candidate>,
     rows: Vec<Row>,
+    /// Where [`rows::build`]'s extra rows went among `rows`.
+    extra_at: Vec<usize>,
     sizes: Vec<usize>,
     x: Vec<f64>,
     /// The bodies before the step, to restore on a failure.
@@ -132,7 +138,10 @@ fn impulses(
 ) -> Result<StepReport, StepError> {
     let mut report = StepReport::default();
     for _ in 0..4 {
-        let solved = delassus::solve(chain, s)?;
+        let solved = match active::solve(chain, s)? {
+            Some(solved) => solved,
+            None => delassus::solve(chain, s)?,
+        };
         report.iterations += solved.iterations;
         report.converged = solved.converged;
         if !modes::reach_new_points(chain, s, stage) {
@@ -164,7 +173,7 @@ fn drift(
             break;
         }
         iterations += 1;
-        rows::build(chain, s, Stage::Drift(h));
+        rows::build(chain, s, Stage::Drift(h), &[]);
         rows::solve(chain, s)?;
         rows::apply(s);
     }
@@ -188,18 +197,24 @@ fn project_out(chain: &mut ExactChain, s: &mut Scratch) -> Result<bool, StepErro
     // it ends. A point the step began with below the floor (the engine's laid tape sits its
     // inset below it) may stay as deep, no deeper.
     let mut deep: Vec<(usize, [f64; 2], f64)> = Vec::new();
+    let mut moved = vec![false; chain.vertices.len()];
     for _ in 0..chain.tolerance.max_iterations {
+        let before = deep.len();
         for i in 0..chain.bodies.len() {
-            for v in chain.vertex_at[i]..chain.vertex_at[i + 1] {
+            let range = chain.vertex_at[i]..chain.vertex_at[i + 1];
+            for (v, moved) in range.clone().zip(&mut moved[range]) {
                 let local = chain.vertices[v];
                 let floor_at = s.start_gaps[v].min(0.0);
                 let below = floor.gap(s.start_pose.point(i, local)) < floor_at - deepest;
-                if below && !deep.iter().any(|d| d.0 == i && d.1 == local) {
+                if below && !*moved {
+                    *moved = true;
                     deep.push((i, local, floor_at));
                 }
             }
         }
-        deep.sort_by_key(|d| d.0);
+        if deep.len() > before {
+            deep.sort_by_key(|d| d.0);
+        }
         let closed = deep
             .iter()
             .all(|&(i, local, at)| (floor.gap(s.start_pose.point(i, local)) - at).abs() <= tol);
@@ -293,9 +308,13 @@ fn prepare(chain: &ExactChain, s: &mut Scratch, gravity: [f64; 2]) {
     }
 }
 
-/// Keeps the contacts' impulses of the stage just solved, their work (each times the mean
-/// velocity of its point over the stage, `s.free` before it and `s.v` after), and their
-/// impulses as the next stage's first guess. Returns their work (J).
+/// Keeps the contacts' impulses of the stage just solved, their work, and their impulses as
+/// the next stage's first guess. Returns their work (J). Each impulse's work is it times the
+/// mean velocity of its point from `s.held` (the joints held, no contact) to `s.v`: both hold
+/// the joints, so the joints' impulses do no work between them and the contacts' work is
+/// that step's whole change of kinetic energy, however the impulse is shared among points
+/// that hold the same motion (several points of a piece flat on the floor). What the joints
+/// take from `s.free` to `s.held` is theirs.
 fn record_contacts(chain: &mut ExactChain, s: &Scratch) -> f64 {
     let Some(floor) = chain.floor else { return 0.0 };
     let mut total = 0.0;
@@ -306,7 +325,7 @@ fn record_contacts(chain: &mut ExactChain, s: &Scratch) -> f64 {
         if c.normal == 0.0 && c.tangent == 0.0 {
             continue;
         }
-        let (before, after) = (s.free[c.body], s.v[c.body]);
+        let (before, after) = (s.held[c.body], s.v[c.body]);
         let mean = |j: [f64; 3]| 0.5 * (rows::dot3(j, before) + rows::dot3(j, after));
         let (dn, dt) = (rows::along(n, c.arm), rows::along(t, c.arm));
         let work_j = [c.normal * mean(dn), c.tangent * mean(dt)];

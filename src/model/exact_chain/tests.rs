@@ -238,3 +238,46 @@ fn a_chain_sliding_on_the_floor_stops_as_coulomb_says() {
         "friction took {friction_w:e} of {e0:e}"
     );
 }
+
+#[test]
+fn a_long_chain_sliding_flat_on_a_frictionless_floor_keeps_its_speed_and_carries_its_weight() {
+    // 2,000 links, each touching the floor at its middle and its far end (the first at its
+    // near end too): 4,001 contact rows on 6,000 coordinates held by 3,998 joint rows, so
+    // each link's points hold the same motion twice over. Sliding at 0.5 m/s with no
+    // friction, the chain keeps its speed, stays on the floor and carries its weight, the
+    // impulse shared among the points that hold the same motion. (Its cost, linear in the
+    // links: benches/step.rs, exact_chain/on-floor.)
+    let (n, l, m) = (2000, 0.01, 0.001);
+    let (mut bodies, joints) = straight(n, l, m);
+    for b in &mut bodies {
+        b.velocity_m_s = [0.5, 0.0];
+    }
+    let mut chain = ExactChain::new(bodies, joints, None, TOLERANCE);
+    let points: Vec<Vec<[f64; 2]>> = nodes(n, l)
+        .into_iter()
+        .map(|mut p| {
+            p.push([0.0, 0.0]);
+            p
+        })
+        .collect();
+    chain.set_floor(level_floor(0.0), &points);
+    let (h, g) = (1e-4, 9.81);
+    for _ in 0..20 {
+        let report = chain.step(h, [0.0, -g]).expect("solves");
+        assert!(report.converged, "{report:?}");
+        let up: f64 = chain.contacts().iter().map(|c| c.normal_n_s[1]).sum();
+        let weight = n as f64 * m * g * h;
+        assert!(
+            (up / weight - 1.0).abs() < 1e-6,
+            "{up:e} against {weight:e}"
+        );
+    }
+    for b in chain.bodies() {
+        assert!(
+            b.position_m[1].abs() < 1e-12
+                && b.velocity_m_s[1].abs() < 1e-9
+                && (b.velocity_m_s[0] - 0.5).abs() < 1e-9,
+            "{b:?}"
+        );
+    }
+}

@@ -1,6 +1,7 @@
-//! The impulses of a stage: the joints held by a direct solve, the floor's contacts solved
-//! against the exact chain's response by projected Gauss-Seidel on their Delassus matrix
-//! (Baraff 1996, section 8: the contacts as `k` auxiliary constraints at `O(k N)`).
+//! The impulses of a stage where the active set (`super::active`) did not settle: the joints
+//! held by a direct solve, the floor's contacts solved against the exact chain's response by
+//! projected Gauss-Seidel on their Delassus matrix (Baraff 1996, section 8: the contacts as
+//! `k` auxiliary constraints at `O(k N)`).
 //!
 //! The joints' rows alone are factorised once. A contact direction's response, the chain's
 //! velocity change from a unit impulse along it with the joints held, is one more solve of
@@ -34,7 +35,7 @@ pub(super) fn solve(chain: &mut ExactChain, s: &mut Scratch) -> Result<StepRepor
     s.base.clone_from(&s.free);
     let held = !(chain.joints.is_empty() && chain.pin.is_none());
     if held {
-        rows::build(chain, s, Stage::Impulses);
+        rows::build(chain, s, Stage::Impulses, &[]);
         rows::solve(chain, s)?;
         rows::apply(s);
     } else {
@@ -50,6 +51,7 @@ pub(super) fn solve(chain: &mut ExactChain, s: &mut Scratch) -> Result<StepRepor
         });
     };
     let held_v = s.v.clone();
+    s.held.clone_from(&held_v);
     let speed = |s: &Scratch, c: usize, v: &[[f64; 3]]| {
         let c = &s.candidates[c];
         dot3(along(floor.normal, c.arm), v[c.body])

@@ -34,17 +34,17 @@ pub(super) struct Candidate {
 fn candidate(
     chain: &ExactChain,
     s: &Scratch,
-    vertex: usize,
-    body: usize,
+    (vertex, body): (usize, usize),
     stage: Impulses,
+    slop: f64,
 ) -> Candidate {
     let local = chain.vertices[vertex];
     let floor = chain.floor.expect("candidates need a floor");
     let gap = floor.gap(s.start_pose.point(body, local));
     let [normal, tangent] = chain.warm[vertex];
-    // Resting contacts, within the slop, all aim at the same velocity: their targets agree,
-    // where closing each one's own microscopic gap would ask a sticking body to turn.
-    let slop = SLOP * position_tolerance(chain);
+    // Resting contacts, within the slop (`SLOP` position tolerances), all aim at the same
+    // velocity: their targets agree, where closing each one's own microscopic gap would ask
+    // a sticking body to turn.
     let target = match stage {
         // Before the drift: close the gap over the step (or push a penetration out), and
         // meet gravity's two half kicks across the floor (`-h g_n / 2` each) with the first.
@@ -101,7 +101,7 @@ pub(super) fn gather(chain: &ExactChain, s: &mut Scratch, stage: Impulses) {
                 Impulses::End => gap <= slop,
             };
             if within {
-                let c = candidate(chain, s, vertex, i, stage);
+                let c = candidate(chain, s, (vertex, i), stage, slop);
                 s.candidates.push(c);
             }
         }
@@ -133,7 +133,7 @@ pub(super) fn reach_new_points(chain: &ExactChain, s: &mut Scratch, stage: Impul
             let end = floor.gap(s.start_pose.point(i, local))
                 + h * (dot3(along(floor.normal, a), v) + fall);
             if end < -tol {
-                let c = candidate(chain, s, vertex, i, Impulses::Start(h));
+                let c = candidate(chain, s, (vertex, i), Impulses::Start(h), SLOP * tol);
                 s.candidates.insert(next, c);
                 added = true;
             }

@@ -116,11 +116,16 @@ pub(super) enum Stage {
 
 /// The rows of `stage`, block by block, their right-hand sides against `s.base` (and, for
 /// the drift, the iterate `s.v`). The impulses' rows are at `s.start_pose` (at the step's
-/// end, the caller has moved it there); the drift's Jacobians at `s.end_pose`.
-pub(super) fn build(chain: &ExactChain, s: &mut Scratch, stage: Stage) {
+/// end, the caller has moved it there); the drift's Jacobians at `s.end_pose`. `extra` are
+/// rows on one body each, in the order of their bodies, their right-hand sides already
+/// against `s.base` (the contacts of `super::active`): each goes into its body's block, and
+/// its place among the rows into `s.extra_at`.
+pub(super) fn build(chain: &ExactChain, s: &mut Scratch, stage: Stage, extra: &[Row]) {
     s.rows.clear();
     s.sizes.clear();
+    s.extra_at.clear();
     let axes = [[1.0, 0.0], [0.0, 1.0]];
+    let mut next = 0;
     for i in 0..chain.bodies.len() {
         let start = s.rows.len();
         if i == 0
@@ -138,6 +143,11 @@ pub(super) fn build(chain: &ExactChain, s: &mut Scratch, stage: Stage) {
                 row.rhs -= row_dot(&row, &s.base);
                 s.rows.push(row);
             }
+        }
+        while next < extra.len() && extra[next].body[0] == i {
+            s.extra_at.push(s.rows.len());
+            s.rows.push(extra[next]);
+            next += 1;
         }
         if i + 1 < chain.bodies.len() {
             joint_rows(chain, s, i, stage);
