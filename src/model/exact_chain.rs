@@ -433,8 +433,9 @@ impl ExactChain {
     ///
     /// A step whose drift turns a body by more than [`Tolerance::max_turn_rad`] (an impact
     /// at its start can spin a piece far faster than the step was chosen for), whose drift
-    /// does not close the joints, or that fails, is taken again as two halves, down to 1/1024
-    /// of it; the report sums the halves.
+    /// does not close the joints, that leaves a joint open wider than a thousand position
+    /// tolerances, or that fails, is taken again as two halves, down to 1/1024 of it; the
+    /// report sums the halves.
     pub fn step(&mut self, h: f64, gravity: [f64; 2]) -> Result<StepReport, StepError> {
         self.step_within(h, gravity, 0)
     }
@@ -449,8 +450,13 @@ impl ExactChain {
         let (bodies, warm) = (self.bodies.clone(), self.warm.clone());
         let result = solve::step(self, h, gravity);
         // A contact solve that missed its tolerance is counted, not halved: a shorter step
-        // does not make a stiff contact set converge.
-        let fits = |r: &StepReport| r.drift_closed && r.max_turn_rad <= self.tolerance.max_turn_rad;
+        // does not make a stiff contact set converge. But a step that leaves a joint open
+        // wider than the contacts' slop (the projection out of the floor could not hold
+        // them: a step that took many points deep at once) is taken again in halves.
+        let open = solve::SLOP * self.tolerance.position_m;
+        let fits = |r: &StepReport| {
+            r.drift_closed && r.max_turn_rad <= self.tolerance.max_turn_rad && r.joint_gap_m <= open
+        };
         match result {
             Ok(report) if fits(&report) || depth >= MAX_DEPTH => {
                 self.fresh = false;

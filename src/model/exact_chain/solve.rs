@@ -11,6 +11,7 @@ mod modes;
 mod rows;
 
 use modes::Impulses;
+pub(super) use modes::SLOP;
 use rows::{Pose, Row, Stage};
 
 /// The step's working memory, kept from step to step.
@@ -138,7 +139,11 @@ fn impulses(
 ) -> Result<StepReport, StepError> {
     let mut report = StepReport::default();
     for _ in 0..4 {
-        let solved = match active::solve(chain, s)? {
+        let solved = match if s.candidates.len() < active::FROM_CONTACTS {
+            None
+        } else {
+            active::solve(chain, s)?
+        } {
             Some(solved) => solved,
             None => delassus::solve(chain, s)?,
         };

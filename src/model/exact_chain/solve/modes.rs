@@ -7,7 +7,7 @@ use super::{Scratch, position_tolerance};
 
 /// A contact point closer to the floor than this many position tolerances rests on it: it
 /// leaves the step with no normal velocity, rather than closing its gap.
-pub(super) const SLOP: f64 = 1000.0;
+pub(in crate::model::exact_chain) const SLOP: f64 = 1000.0;
 
 /// A contact point within reach of the floor this step.
 #[derive(Debug, Clone, Copy)]
