@@ -122,7 +122,8 @@ pub struct Solver {
     /// docs/final-bang.md). While rolling, a joint that stiff pushes energy in (see
     /// `joint_hz`); in the bang the step follows the spin and it does not.
     pub bang_joint_hz: f64,
-    /// What solves the final bang (default: `"rapier"`).
+    /// What solves the final bang (default: `"rapier"`; every shipped scene names
+    /// `"exact"`).
     pub bang_engine: BangEngine,
 }
 
@@ -435,15 +436,18 @@ contact_speed_m_s = 0.3
         assert_relative_eq!(s.stop.max_time_s, 60.0);
         assert_relative_eq!(s.stop.bang_cap_s, 2.0);
         assert_relative_eq!(s.solver.bang_piece_m, 0.0005);
+        assert_eq!(s.solver.bang_engine, BangEngine::Exact);
         assert_relative_eq!(s.output.sample_interval_s, 0.001);
     }
 
     #[test]
     fn shipped_scenes_equal_their_defaults() {
         // The shipped files write out default values; dropping them must not change the scene.
-        // The yoga mat sets one value off its default: it rolls on to r = b.
+        // The yoga mat sets two values off their defaults: it rolls on to r = b, and its bang
+        // is on the exact chain.
         let s = shipped("yoga-mat");
-        let text = format!("{MINIMAL}[stop]\nbang_radius_m = 0.005\n");
+        let text =
+            format!("{MINIMAL}[solver]\nbang_engine = \"exact\"\n[stop]\nbang_radius_m = 0.005\n");
         let d = Scene::from_toml_str(&text, "yoga-mat").unwrap();
         assert_eq!(
             Scene {
