@@ -22,7 +22,7 @@ use super::{Scratch, position_tolerance};
 /// left to Gauss-Seidel, whose `O(k N + k^2)` is then cheap. (On the thin tape, where a
 /// stage has a few contacts, the active set's solutions leave the joints' work spread
 /// wider over 8 pushes, -4.0 to +3.1 % of what the bang dissipates, than Gauss-Seidel's,
-/// -0.3 to +3.0 %: a difference not yet explained.)
+/// -0.3 to +3.0 %: a difference not yet explained; docs/final-bang.md.)
 pub(super) const FROM_CONTACTS: usize = 64;
 
 /// The most passes (each one direct solve) before the stage is left to Gauss-Seidel.
