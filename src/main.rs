@@ -6,13 +6,14 @@
 //! Results go to stdout, diagnostics to stderr. Exit codes: 0 success, 1 a failure during
 //! the run (e.g. an output file could not be written) or an unreadable MCAP file, 2 bad input
 //! (scene or usage), 3 a guard stopped the run (a blow-up: its reason is on stderr and in
-//! `report.json`, and the outputs hold everything logged up to the stop), 130 a run stopped
-//! by Ctrl-C (its outputs are complete up to there).
+//! `report.json`, and the outputs hold everything logged up to the stop), 130, 143 or 129 a
+//! run stopped by SIGINT (Ctrl-C), SIGTERM or SIGHUP (its outputs are complete up to
+//! there, the signal named).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 
 use clap::{Parser, Subcommand};
 
@@ -183,7 +184,7 @@ fn run_command(scene: &Scene, out: Option<PathBuf>, view: &View) -> ExitCode {
             match end.status() {
                 Status::Completed => {}
                 Status::Interrupted => {
-                    eprintln!("interrupted: the outputs end at the last step taken");
+                    eprintln!("{end}: the outputs end at the last step taken");
                 }
                 Status::Stopped => eprintln!("error: the run was stopped by a guard: {end}"),
             }
@@ -227,22 +228,13 @@ fn run_chain_command(chain: &FoldedChain, out: Option<PathBuf>, view: &View) -> 
     }
 }
 
-/// The flag Ctrl-C raises: the first asks the run to stop and finish its files; a second
-/// one ends the process at once.
+/// The flag a stopping signal raises (SIGINT, SIGTERM, SIGHUP: `uncoil::run::signals`): the
+/// first asks the run to stop and finish its files; a second one ends the process at once.
 fn stop_flag() -> Arc<AtomicBool> {
-    let stop = Arc::new(AtomicBool::new(false));
-    let flag = Arc::clone(&stop);
-    // The first Ctrl-C asks the run to stop and finish its files; a second one ends
-    // the process at once.
-    let handler = ctrlc::set_handler(move || {
-        if flag.swap(true, Ordering::SeqCst) {
-            std::process::exit(Exit::Interrupted.code().into());
-        }
-    });
-    if let Err(e) = handler {
-        eprintln!("warning: Ctrl-C will not finish the files: {e}");
-    }
-    stop
+    uncoil::run::signals::listen().unwrap_or_else(|e| {
+        eprintln!("warning: a signal will not finish the files: {e}");
+        Arc::new(AtomicBool::new(false))
+    })
 }
 
 fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> ExitCode {

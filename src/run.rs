@@ -12,6 +12,7 @@ pub mod milestones;
 pub mod report;
 mod runner;
 pub mod sample;
+pub mod signals;
 pub mod stop;
 
 use std::sync::Arc;

@@ -510,8 +510,9 @@ fn no_mcap_flag_writes_no_log() {
     assert!(!out.join("run.mcap.partial").exists());
 }
 
-#[test]
-fn ctrl_c_stops_the_run_and_leaves_a_finished_log() {
+/// Sends `signal` (`kill -SIGNAL`) to a running run: it stops, finishes its files, names the
+/// signal in its report and log, and exits with `128 +` the signal's number.
+fn a_signal_stops_the_run_and_leaves_a_finished_log(signal: &str, code: i32) {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("slow.toml");
     std::fs::write(&scene, SLOW).unwrap();
@@ -538,17 +539,18 @@ fn ctrl_c_stops_the_run_and_leaves_a_finished_log() {
     }
     std::thread::sleep(Duration::from_millis(300));
     let killed = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args([&format!("-{signal}"), &child.id().to_string()])
         .status()
         .unwrap();
     assert!(killed.success());
     let output = child.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(130), "stderr: {stderr}");
-    assert!(stderr.contains("interrupted"), "stderr: {stderr}");
+    assert_eq!(output.status.code(), Some(code), "stderr: {stderr}");
+    let named = format!("interrupted by SIG{signal}");
+    assert!(stderr.contains(&named), "stderr: {stderr}");
     assert!(!partial.exists(), "the partial file was renamed");
     let r = read(&out.join("run.mcap"));
-    assert_eq!(r.metadata["run"]["stop_reason"], "interrupted");
+    assert_eq!(r.metadata["run"]["stop_reason"], named);
     assert!(r.metadata.contains_key("ledger"));
     let last_event = &r.messages["/events"].last().unwrap().1;
     assert_eq!(last_event["kind"], "Warning");
@@ -559,6 +561,30 @@ fn ctrl_c_stops_the_run_and_leaves_a_finished_log() {
     let report: Value =
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["stop"]["reason"], "interrupted");
+    assert_eq!(report["stop"]["signal"], format!("SIG{signal}"));
+    for file in std::fs::read_dir(&out).unwrap() {
+        let name = file.unwrap().file_name();
+        assert!(
+            !name.to_string_lossy().ends_with(".partial"),
+            "{name:?} left behind"
+        );
+    }
+}
+
+#[test]
+fn ctrl_c_stops_the_run_and_leaves_a_finished_log() {
+    a_signal_stops_the_run_and_leaves_a_finished_log("INT", 130);
+}
+
+#[test]
+fn sigterm_stops_the_run_as_ctrl_c_does_and_exits_143() {
+    // What Slurm sends at a time limit, on scancel and on preemption.
+    a_signal_stops_the_run_and_leaves_a_finished_log("TERM", 143);
+}
+
+#[test]
+fn sighup_stops_the_run_as_ctrl_c_does_and_exits_129() {
+    a_signal_stops_the_run_and_leaves_a_finished_log("HUP", 129);
 }
 
 #[test]

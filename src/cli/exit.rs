@@ -3,6 +3,7 @@
 
 use std::process::ExitCode;
 
+use uncoil::run::signals::{self, Signal};
 use uncoil::run::stop::Status;
 
 /// How `uncoil` ends.
@@ -18,7 +19,9 @@ pub enum Exit {
     BadInput,
     /// 3: a guard stopped a run (its outputs hold everything up to the stop).
     Stopped,
-    /// 130: stopped by Ctrl-C (the outputs are finished up to the last step taken).
+    /// `128 +` the signal's number: stopped by a signal (the outputs are finished up to the
+    /// last step taken): 130 for SIGINT (Ctrl-C), 143 for SIGTERM, 129 for SIGHUP, as a
+    /// shell reports a process the signal ended.
     Interrupted,
 }
 
@@ -39,7 +42,7 @@ impl Exit {
             Self::Failed => 1,
             Self::BadInput => 2,
             Self::Stopped => 3,
-            Self::Interrupted => 130,
+            Self::Interrupted => signals::received().unwrap_or(Signal::Int).exit_code(),
         }
     }
 }

@@ -433,7 +433,10 @@ fn ending(
             max_time_s: scene.stop.max_time_s,
         });
     }
-    interrupted.then_some(StopReason::Interrupted { t_s: obs.t_s })
+    interrupted.then_some(StopReason::Interrupted {
+        t_s: obs.t_s,
+        signal: crate::run::signals::received(),
+    })
 }
 
 /// The warning event of a run that ends before its bang does.

@@ -8,6 +8,7 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use crate::run::guard::GuardTrip;
+use crate::run::signals::Signal;
 
 /// Why a run stopped.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -39,10 +40,14 @@ pub enum StopReason {
         /// The scene's `stop.max_time_s` (s).
         max_time_s: f64,
     },
-    /// The run was asked to stop (Ctrl-C); its outputs end at the last step taken.
+    /// The run was asked to stop (a signal, or Python's Ctrl-C); its outputs end at the last
+    /// step taken.
     Interrupted {
         /// When (s).
         t_s: f64,
+        /// The signal that asked, where one did.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        signal: Option<Signal>,
     },
     /// A guard stopped the run.
     Guard(GuardTrip),
@@ -104,7 +109,11 @@ impl fmt::Display for StopReason {
                 100.0 * still_moving
             ),
             Self::MaxTime { max_time_s, .. } => write!(f, "stop.max_time_s = {max_time_s} reached"),
-            Self::Interrupted { .. } => f.write_str("interrupted"),
+            Self::Interrupted {
+                signal: Some(signal),
+                ..
+            } => write!(f, "interrupted by {signal}"),
+            Self::Interrupted { signal: None, .. } => f.write_str("interrupted"),
             Self::Guard(trip) => trip.fmt(f),
         }
     }
@@ -149,7 +158,11 @@ mod tests {
         assert_eq!(rest.status(), Status::Completed);
         assert_eq!(max.status(), Status::Completed);
         assert_eq!(
-            StopReason::Interrupted { t_s: 0.1 }.status(),
+            StopReason::Interrupted {
+                t_s: 0.1,
+                signal: None
+            }
+            .status(),
             Status::Interrupted
         );
         assert_eq!(
