@@ -230,7 +230,7 @@ fn run_chain_command(chain: &FoldedChain, out: Option<PathBuf>, view: &View) -> 
 
 /// The flag a stopping signal raises (SIGINT, SIGTERM, SIGHUP: `uncoil::run::signals`): the
 /// first asks the run to stop and finish its files; a second one ends the process at once.
-fn stop_flag() -> Arc<AtomicBool> {
+pub(crate) fn stop_flag() -> Arc<AtomicBool> {
     uncoil::run::signals::listen().unwrap_or_else(|e| {
         eprintln!("warning: a signal will not finish the files: {e}");
         Arc::new(AtomicBool::new(false))

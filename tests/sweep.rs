@@ -417,3 +417,74 @@ fn a_key_varied_twice_exits_2_and_runs_nothing() {
         ));
     assert!(!dir.path().join("sweep.csv").exists());
 }
+
+#[test]
+fn sigterm_stops_a_sweep_its_running_row_says_interrupted_and_resume_finishes_it() {
+    // What Slurm sends a task at its time limit or on scancel. Two runs of about 2 s each,
+    // one at a time: the signal reaches the first while it runs.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("slow.toml");
+    std::fs::write(
+        &scene,
+        "name = \"slow\"\n[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\nmass_kg = 1.5\n\
+         [push]\ncontact_speed_m_s = 0.3\n[solver]\nmax_dt_s = 0.00001\n\
+         [stop]\nmax_time_s = 1.2\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let args = |resume: bool| {
+        let mut a = vec![
+            "sweep".to_owned(),
+            scene.display().to_string(),
+            "--vary".to_owned(),
+            "push.contact_speed_m_s=0.3,0.31".to_owned(),
+            "--jobs".to_owned(),
+            "1".to_owned(),
+            "--quiet".to_owned(),
+            "--out".to_owned(),
+            out.display().to_string(),
+        ];
+        if resume {
+            a.push("--resume".to_owned());
+        }
+        a
+    };
+    let child = std::process::Command::new(assert_cmd::cargo::cargo_bin("uncoil"))
+        .args(args(false))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(700));
+    let killed = std::process::Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let output = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(143), "stderr: {stderr}");
+    assert!(
+        stderr.contains("interrupted by SIGTERM") && stderr.contains("--resume"),
+        "stderr: {stderr}"
+    );
+    // No run finished: what rows there are say interrupted, and none is left partial.
+    let t = SweepTable::read(&out.join("sweep.csv")).unwrap();
+    assert!(t.rows.len() <= 1, "{:?}", t.rows);
+    for row in 0..t.rows.len() {
+        assert_eq!(cell(&t, row, "status"), "interrupted");
+    }
+    // Resumed, every combination runs to its end.
+    uncoil()
+        .args(args(true))
+        .assert()
+        .success()
+        .stdout(predicate::str::contains(
+            "2 runs (0 failed, 0 stopped by a guard)",
+        ));
+    let t = SweepTable::read(&out.join("sweep.csv")).unwrap();
+    assert_eq!(t.rows.len(), 2);
+    for row in 0..2 {
+        assert_eq!(cell(&t, row, "status"), "max_time");
+    }
+}

@@ -10,6 +10,7 @@ use crate::cli::exit::Exit;
 use clap::{Args, ValueEnum};
 
 use uncoil::output::write_atomic;
+use uncoil::run::signals;
 use uncoil::study::analysis::{Reference, SweepAnalysis};
 use uncoil::study::sweep::{
     Col, Shard, Sweep, SweepOptions, SweepTable, Vary, merge, write_merged,
@@ -166,7 +167,8 @@ fn merge_command(files: &[PathBuf], dir: &Path, allow_partial: bool) -> ExitCode
 
 /// `uncoil sweep`: 0 every run ended, 1 a run failed or a file could not be written,
 /// 2 bad input (a combination's scene is invalid), 3 a guard stopped a run (and none
-/// failed).
+/// failed), 130, 143 or 129 a signal stopped it (SIGINT, SIGTERM, SIGHUP: the runs in
+/// progress are rows marked `interrupted`, which `--resume` runs again).
 pub fn sweep(args: SweepArgs) -> ExitCode {
     if !args.merge.is_empty() {
         let dir = args.out.unwrap_or_else(|| folder_of(&args.merge[0]));
@@ -216,7 +218,9 @@ pub fn sweep(args: SweepArgs) -> ExitCode {
         jobs: args.jobs,
         progress: !args.quiet,
         resume: args.resume,
-        ..SweepOptions::default()
+        // A signal stops the runs in progress (their rows say `interrupted`) and starts no
+        // other; `--resume` runs them and the rest.
+        stop: crate::stop_flag(),
     };
     eprintln!(
         "sweeping {} ({} combinations{}) into {} ...",
@@ -244,6 +248,13 @@ pub fn sweep(args: SweepArgs) -> ExitCode {
                 o.grid,
                 o.path.display()
             );
+            if let Some(signal) = signals::received() {
+                eprintln!(
+                    "interrupted by {signal}: the runs it stopped are rows marked interrupted; \
+                     the same command with --resume runs them and the rest"
+                );
+                return Exit::Interrupted.into();
+            }
             if o.failed > 0 {
                 Exit::Failed.into()
             } else if o.stopped > 0 {
