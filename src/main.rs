@@ -253,6 +253,12 @@ fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> ExitCode {
         }
         return Exit::Failed.into();
     }
+    if let Some(lines) = check::crashed_run(&dir) {
+        for line in lines {
+            println!("{}: {line}", dir.display());
+        }
+        return Exit::Failed.into();
+    }
     let out = out.unwrap_or_else(|| PathBuf::from("runs/check"));
     let files = match check::scene_files(&dir) {
         Ok(f) if f.is_empty() => {

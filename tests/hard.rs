@@ -230,6 +230,24 @@ fn a_killed_run_leaves_only_partial_files() {
     let text = std::fs::read_to_string(&partial).unwrap();
     assert!(text.starts_with("t_s,laid_fraction,"), "{}", &text[..40]);
     assert!(text.lines().count() > 10);
+    // `uncoil check` on the folder says what the killed run left, not "no scene files":
+    // the partial files, the complete rows and their last time, the log, the stale lock.
+    let complete = text.matches('\n').count() - 1;
+    let assert = Command::cargo_bin("uncoil")
+        .unwrap()
+        .arg("check")
+        .arg(&out)
+        .assert()
+        .code(1);
+    let stdout = String::from_utf8_lossy(&assert.get_output().stdout).into_owned();
+    for said in [
+        "an interrupted run: no report.json; partial files: samples.csv.partial",
+        &format!("samples.csv.partial: {complete} complete rows, up to t = "),
+        "run.mcap.partial: ",
+        "stale: its process is gone",
+    ] {
+        assert!(stdout.contains(said), "{said:?} not in:\n{stdout}");
+    }
 }
 
 #[test]

@@ -119,6 +119,18 @@ impl RunFolder {
     }
 }
 
+/// Who took `dir`'s lock, as it wrote itself into the lock file, and whether a process
+/// still holds it (`false`: stale, its process gone, so it blocks no new run); `None` if
+/// the folder has no lock file.
+pub fn lock_holder(dir: &Path) -> Option<(String, bool)> {
+    let path = dir.join(LOCK);
+    let file = OpenOptions::new().read(true).write(true).open(&path).ok()?;
+    let held = file.try_lock().is_err();
+    drop(file);
+    let text = fs::read_to_string(&path).unwrap_or_default();
+    Some((text.trim().to_owned(), held))
+}
+
 /// The id of a run: FNV-1a (64 bits, the same on every platform) of `uncoil`'s version,
 /// the scene's name and its text with the overrides, in hex.
 pub fn run_id(scene_name: &str, scene_text: &str) -> String {

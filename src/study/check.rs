@@ -19,6 +19,10 @@ use crate::run::stop::{Status, StopReason};
 use crate::scene::Scene;
 use crate::scene::folded;
 
+mod crashed;
+
+pub use crashed::crashed_run;
+
 /// How one case ended.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Outcome {

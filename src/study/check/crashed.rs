@@ -1,0 +1,107 @@
+//! What a run's folder holds after the run was killed (`kill -9`, a crash, a scheduler's
+//! SIGKILL): its `.partial` files and its lock, and no `report.json`. Read, never changed.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::output::inspect::read_inventory;
+use crate::output::{folder, partial_path};
+
+/// What the folder `dir` holds if a run was killed in it (a `.partial` file or a lock, and
+/// no `report.json`), a fact a line; `None` if it is not such a folder.
+pub fn crashed_run(dir: &Path) -> Option<Vec<String>> {
+    if dir.join(folder::REPORT).exists() {
+        return None;
+    }
+    let partial: Vec<String> = [folder::SAMPLES, folder::REPORT, folder::LOG]
+        .into_iter()
+        .map(|name| partial_path(&dir.join(name)))
+        .filter(|p| p.exists())
+        .map(|p| {
+            p.file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    let lock = folder::lock_holder(dir);
+    if partial.is_empty() && lock.is_none() {
+        return None;
+    }
+    let mut lines = vec![format!(
+        "an interrupted run: no {}; partial files: {}",
+        folder::REPORT,
+        if partial.is_empty() {
+            "none".to_owned()
+        } else {
+            partial.join(", ")
+        }
+    )];
+    let samples = partial_path(&dir.join(folder::SAMPLES));
+    if samples.exists() {
+        lines.push(match complete_rows(&samples) {
+            Ok((0, _)) => format!("{}.partial: no complete row", folder::SAMPLES),
+            Ok((rows, t)) => format!(
+                "{}.partial: {rows} complete rows, up to t = {t} s simulated",
+                folder::SAMPLES
+            ),
+            Err(e) => format!("{}.partial: not readable: {e:#}", folder::SAMPLES),
+        });
+    }
+    let log = partial_path(&dir.join(folder::LOG));
+    if log.exists() {
+        lines.push(match read_inventory(&log) {
+            Ok(inv) => {
+                let messages: u64 = inv.channels.values().map(|c| c.messages).sum();
+                let mut line = format!("{}.partial: readable, {messages} messages", folder::LOG);
+                if let Some((_, end)) = inv.time_range_ns {
+                    let _ = write!(line, ", up to t = {:.4} s", end as f64 * 1e-9);
+                }
+                line
+            }
+            Err(e) => format!("{}.partial: not readable: {e:#}", folder::LOG),
+        });
+    }
+    if let Some((holder, held)) = lock {
+        let holder = if holder.is_empty() {
+            "it did not say whose".to_owned()
+        } else {
+            holder
+        };
+        lines.push(format!(
+            ".uncoil.lock: {holder}; {}",
+            if held {
+                "still held: that process is running"
+            } else {
+                "stale: its process is gone, and it blocks no new run"
+            }
+        ));
+    }
+    Some(lines)
+}
+
+/// The complete rows of a cut `samples.csv` (a coil's or a folded chain's: those ended by a
+/// newline, with every column), read with the `csv` crate, and the simulated time of the
+/// last (its first column, `t_s`).
+fn complete_rows(path: &Path) -> anyhow::Result<(usize, f64)> {
+    let bytes = std::fs::read(path)?;
+    let ended = bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+    let mut reader = csv::Reader::from_reader(&bytes[..ended]);
+    let header = reader.headers()?.clone();
+    anyhow::ensure!(
+        header.get(0) == Some("t_s"),
+        "its header does not start with t_s"
+    );
+    let (mut rows, mut t) = (0, 0.0);
+    for record in reader.records() {
+        let Ok(record) = record else { break };
+        match record.get(0).map(str::parse::<f64>) {
+            Some(Ok(t_s)) if record.len() == header.len() => {
+                rows += 1;
+                t = t_s;
+            }
+            _ => break,
+        }
+    }
+    Ok((rows, t))
+}
