@@ -18,7 +18,7 @@
 //!   samples beside a finished run's report.
 
 use std::fs::{self, File, OpenOptions};
-use std::io::Write as _;
+use std::io::{Read as _, Write as _};
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
@@ -138,9 +138,17 @@ pub fn run_id(scene_name: &str, scene_text: &str) -> String {
     format!("{:016x}", fnv1a(text.as_bytes()))
 }
 
+/// FNV-1a's starting value (64 bits).
+const FNV1A_START: u64 = 0xcbf2_9ce4_8422_2325;
+
 /// FNV-1a, 64 bits.
 pub fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+    fnv1a_more(FNV1A_START, bytes)
+}
+
+/// FNV-1a of what `hash` was taken over, then `bytes`.
+fn fnv1a_more(hash: u64, bytes: &[u8]) -> u64 {
+    bytes.iter().fold(hash, |h, &b| {
         (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
     })
 }
@@ -155,13 +163,27 @@ pub struct FileStamp {
 }
 
 impl FileStamp {
-    /// The stamp of the file at `path`.
+    /// The stamp of the file at `path`, read in blocks (a thin tape's `samples.csv` is
+    /// tens of megabytes).
     pub fn of(path: &Path) -> anyhow::Result<Self> {
-        let bytes = fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-        Ok(Self {
-            bytes: bytes.len() as u64,
-            fnv1a: format!("{:016x}", fnv1a(&bytes)),
-        })
+        let read = || -> std::io::Result<Self> {
+            let mut file = File::open(path)?;
+            let mut block = vec![0; 1 << 16];
+            let (mut bytes, mut hash) = (0u64, FNV1A_START);
+            loop {
+                let n = file.read(&mut block)?;
+                if n == 0 {
+                    break;
+                }
+                bytes += n as u64;
+                hash = fnv1a_more(hash, &block[..n]);
+            }
+            Ok(Self {
+                bytes,
+                fnv1a: format!("{hash:016x}"),
+            })
+        };
+        read().with_context(|| format!("cannot read {}", path.display()))
     }
 }
 
@@ -221,4 +243,21 @@ pub fn mismatches(dir: &Path) -> Vec<String> {
         }
     }
     problems
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stamp_read_in_blocks_is_the_hash_of_the_whole_file() {
+        // Several blocks and a part of one, so that the blocks' joins are crossed.
+        let bytes: Vec<u8> = (0..200_003_u32).map(|i| (i * 7 % 251) as u8).collect();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("samples.csv");
+        fs::write(&path, &bytes).unwrap();
+        let stamp = FileStamp::of(&path).unwrap();
+        assert_eq!(stamp.bytes, bytes.len() as u64);
+        assert_eq!(stamp.fnv1a, format!("{:016x}", fnv1a(&bytes)));
+    }
 }

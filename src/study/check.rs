@@ -210,31 +210,41 @@ fn chain_report_problem(text: &str) -> Option<String> {
 }
 
 /// Problems of a `samples.csv` text against its `columns`: header, cell count, non-finite
-/// cells; at most about ten.
+/// cells; at most about ten. Read with the `csv` crate, as every other reader of the file
+/// reads it (quoting included).
 pub fn csv_problems(text: &str, columns: &[String]) -> Vec<String> {
     let mut problems = Vec::new();
-    let mut lines = text.lines();
-    if lines.next() != Some(columns.join(",").as_str()) {
-        problems.push("samples.csv: header differs from the documented columns".to_owned());
+    let mut reader = csv::ReaderBuilder::new()
+        .flexible(true)
+        .from_reader(text.as_bytes());
+    match reader.headers() {
+        Ok(header) if header.iter().eq(columns.iter().map(String::as_str)) => {}
+        _ => problems.push("samples.csv: header differs from the documented columns".to_owned()),
     }
     let mut rows = 0usize;
-    for (i, line) in lines.enumerate() {
+    for (i, record) in reader.records().enumerate() {
         rows += 1;
         if problems.len() > 10 {
             problems.push("samples.csv: more problems not listed".to_owned());
             break;
         }
-        let cells: Vec<&str> = line.split(',').collect();
-        if cells.len() != columns.len() {
+        let record = match record {
+            Ok(r) => r,
+            Err(e) => {
+                problems.push(format!("samples.csv row {}: {e}", i + 1));
+                continue;
+            }
+        };
+        if record.len() != columns.len() {
             problems.push(format!(
                 "samples.csv row {}: {} cells, expected {}",
                 i + 1,
-                cells.len(),
+                record.len(),
                 columns.len()
             ));
             continue;
         }
-        for (cell, column) in cells.iter().zip(columns.iter()) {
+        for (cell, column) in record.iter().zip(columns.iter()) {
             if cell.is_empty() || problems.len() > 10 {
                 continue;
             }

@@ -30,7 +30,7 @@ impl FromStr for Vary {
         let key = key.trim();
         check_key(key).map_err(|r| fail(&r))?;
         let mut values = Vec::new();
-        for raw in list.split(',') {
+        for raw in split_top_level(list) {
             let raw = raw.trim();
             if raw.is_empty() {
                 return Err(fail("empty value in the list"));
@@ -161,6 +161,28 @@ pub fn file_name(shard: Shard) -> String {
     }
 }
 
+/// `list` split at its commas outside brackets, braces and quotes: a TOML array or table,
+/// or a quoted string with a comma, is one value.
+fn split_top_level(list: &str) -> Vec<&str> {
+    let (mut parts, mut start, mut depth, mut quote) = (Vec::new(), 0, 0i32, None);
+    for (i, c) in list.char_indices() {
+        match (quote, c) {
+            (Some(q), _) if c == q => quote = None,
+            (Some(_), _) => {}
+            (None, '"' | '\'') => quote = Some(c),
+            (None, '[' | '{') => depth += 1,
+            (None, ']' | '}') => depth -= 1,
+            (None, ',') if depth == 0 => {
+                parts.push(&list[start..i]);
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    parts.push(&list[start..]);
+    parts
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -178,6 +200,19 @@ mod tests {
         assert_eq!(v.values[1].value, toml::Value::Integer(16));
         assert!("a=1,,2".parse::<Vary>().is_err());
         assert!("a".parse::<Vary>().is_err());
+    }
+
+    #[test]
+    fn a_list_splits_only_at_its_top_level_commas() {
+        assert_eq!(split_top_level("8, 16,32"), ["8", " 16", "32"]);
+        assert_eq!(
+            split_top_level("[1, 2],[3,4], {a = 1, b = 2}"),
+            ["[1, 2]", "[3,4]", " {a = 1, b = 2}"]
+        );
+        assert_eq!(
+            split_top_level("\"a,b\",'c,d',e"),
+            ["\"a,b\"", "'c,d'", "e"]
+        );
     }
 
     #[test]
