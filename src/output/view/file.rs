@@ -85,7 +85,8 @@ impl McapFile {
             .compression_threads(0);
         let handle = context
             .mcap_writer_with_options(options)
-            .create(BufWriter::new(file))?;
+            .create(BufWriter::new(file))
+            .with_context(|| format!("cannot write {}", tmp.display()))?;
         let version = env!("CARGO_PKG_VERSION");
         let s = &scene.solver;
         for (name, meta) in [
@@ -125,7 +126,9 @@ impl McapFile {
                 ]),
             ),
         ] {
-            handle.write_metadata(name, meta)?;
+            handle
+                .write_metadata(name, meta)
+                .with_context(|| format!("cannot write {}", tmp.display()))?;
         }
         Ok(Self {
             path: path.to_owned(),
@@ -137,26 +140,35 @@ impl McapFile {
     /// Writes the run's end (stop reason, counts, the ledger), finishes the file and renames
     /// it to its final name.
     pub fn finish(self, report: &RunReport) -> anyhow::Result<()> {
-        self.handle.write_metadata(
-            "run",
-            pairs(&[
-                ("run_id", self.run_id.clone()),
-                ("stop_reason", report.stop.to_string()),
-                ("links", report.links.to_string()),
-                ("steps", report.steps.to_string()),
-                ("sim_time_s", report.sim_time_s.to_string()),
-                // No wall time: it differs from run to run, and a repeated run must write the
-                // same bytes (report.json has it).
-            ]),
-        )?;
+        let tmp = partial(&self.path);
+        // The log's own errors (a full disk while its last chunks are written) name it.
+        let write = |e: foxglove::FoxgloveError| {
+            anyhow::Error::new(e).context(format!("cannot write {}", tmp.display()))
+        };
+        self.handle
+            .write_metadata(
+                "run",
+                pairs(&[
+                    ("run_id", self.run_id.clone()),
+                    ("stop_reason", report.stop.to_string()),
+                    ("links", report.links.to_string()),
+                    ("steps", report.steps.to_string()),
+                    ("sim_time_s", report.sim_time_s.to_string()),
+                    // No wall time: it differs from run to run, and a repeated run must write the
+                    // same bytes (report.json has it).
+                ]),
+            )
+            .map_err(write)?;
         let mut ledger = BTreeMap::new();
         flatten("", &serde_json::to_value(report.ledger)?, &mut ledger);
-        self.handle.write_metadata("ledger", ledger)?;
-        let out = self.handle.close()?;
+        self.handle
+            .write_metadata("ledger", ledger)
+            .map_err(write)?;
+        let out = self.handle.close().map_err(write)?;
         out.into_inner()
             .map_err(|e| e.into_error())
-            .with_context(|| format!("cannot write {}", partial(&self.path).display()))?;
-        fs::rename(partial(&self.path), &self.path)
+            .with_context(|| format!("cannot write {}", tmp.display()))?;
+        fs::rename(&tmp, &self.path)
             .with_context(|| format!("cannot rename to {}", self.path.display()))?;
         Ok(())
     }
