@@ -1,5 +1,6 @@
 //! What a run's folder holds after the run was killed (`kill -9`, a crash, a scheduler's
-//! SIGKILL): its `.partial` files and its lock, and no `report.json`. Read, never changed.
+//! SIGKILL), or while it still runs: its `.partial` files and its lock, and no
+//! `report.json`. Read, never changed.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -28,8 +29,14 @@ pub fn crashed_run(dir: &Path) -> Option<Vec<String>> {
     if partial.is_empty() && lock.is_none() {
         return None;
     }
+    let running = lock.as_ref().is_some_and(|(_, held)| *held);
     let mut lines = vec![format!(
-        "an interrupted run: no {}; partial files: {}",
+        "{}: no {}; partial files: {}",
+        if running {
+            "a run still going"
+        } else {
+            "an interrupted run"
+        },
         folder::REPORT,
         if partial.is_empty() {
             "none".to_owned()
