@@ -420,15 +420,16 @@ fn a_key_varied_twice_exits_2_and_runs_nothing() {
 
 #[test]
 fn sigterm_stops_a_sweep_its_running_row_says_interrupted_and_resume_finishes_it() {
-    // What Slurm sends a task at its time limit or on scancel. Two runs of about 2 s each,
-    // one at a time: the signal reaches the first while it runs.
+    // What Slurm sends a task at its time limit or on scancel. Two runs of about 4 s each
+    // (on a 2-core machine), one at a time: the signal, half a second in, reaches the first
+    // while it runs.
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("slow.toml");
     std::fs::write(
         &scene,
         "name = \"slow\"\n[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\nmass_kg = 1.5\n\
          [push]\ncontact_speed_m_s = 0.3\n[solver]\nmax_dt_s = 0.00001\n\
-         [stop]\nmax_time_s = 1.2\n",
+         [stop]\nmax_time_s = 2.5\n",
     )
     .unwrap();
     let out = dir.path().join("out");
@@ -455,7 +456,7 @@ fn sigterm_stops_a_sweep_its_running_row_says_interrupted_and_resume_finishes_it
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(700));
+    std::thread::sleep(std::time::Duration::from_millis(500));
     let killed = std::process::Command::new("kill")
         .args(["-TERM", &child.id().to_string()])
         .status()
@@ -474,7 +475,7 @@ fn sigterm_stops_a_sweep_its_running_row_says_interrupted_and_resume_finishes_it
     for row in 0..t.rows.len() {
         assert_eq!(cell(&t, row, "status"), "interrupted");
     }
-    // Resumed, every combination runs to its end.
+    // Resumed, every combination runs to its end (its bang at rest, or the time limit).
     uncoil()
         .args(args(true))
         .assert()
@@ -485,6 +486,7 @@ fn sigterm_stops_a_sweep_its_running_row_says_interrupted_and_resume_finishes_it
     let t = SweepTable::read(&out.join("sweep.csv")).unwrap();
     assert_eq!(t.rows.len(), 2);
     for row in 0..2 {
-        assert_eq!(cell(&t, row, "status"), "max_time");
+        let status = cell(&t, row, "status");
+        assert!(status == "ok" || status == "max_time", "row {row}: {status}");
     }
 }
