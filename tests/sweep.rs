@@ -487,6 +487,9 @@ fn sigterm_stops_a_sweep_its_running_row_says_interrupted_and_resume_finishes_it
     assert_eq!(t.rows.len(), 2);
     for row in 0..2 {
         let status = cell(&t, row, "status");
-        assert!(status == "ok" || status == "max_time", "row {row}: {status}");
+        assert!(
+            status == "ok" || status == "max_time",
+            "row {row}: {status}"
+        );
     }
 }
