@@ -139,11 +139,14 @@ fn impulses(
 ) -> Result<StepReport, StepError> {
     let mut report = StepReport::default();
     for _ in 0..4 {
-        let solved = match if s.candidates.len() < active::FROM_CONTACTS {
-            None
-        } else {
+        // The active set where many points touch; Gauss-Seidel for a few, or where the
+        // active set's modes did not settle.
+        let settled = if s.candidates.len() >= active::FROM_CONTACTS {
             active::solve(chain, s)?
-        } {
+        } else {
+            None
+        };
+        let solved = match settled {
             Some(solved) => solved,
             None => delassus::solve(chain, s)?,
         };

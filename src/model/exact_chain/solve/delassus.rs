@@ -1,4 +1,5 @@
-//! The impulses of a stage where the active set (`super::active`) did not settle: the joints
+//! The impulses of a stage with fewer than `super::active::FROM_CONTACTS` contact points, or
+//! where the active set (`super::active`) did not settle: the joints
 //! held by a direct solve, the floor's contacts solved against the exact chain's response by
 //! projected Gauss-Seidel on their Delassus matrix (Baraff 1996, section 8: the contacts as
 //! `k` auxiliary constraints at `O(k N)`).
