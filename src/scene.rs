@@ -122,8 +122,7 @@ pub struct Solver {
     /// docs/final-bang.md). While rolling, a joint that stiff pushes energy in (see
     /// `joint_hz`); in the bang the step follows the spin and it does not.
     pub bang_joint_hz: f64,
-    /// What solves the final bang (default: `"rapier"`; every shipped scene names
-    /// `"exact"`).
+    /// What solves the final bang (default: `"exact"`; `"rapier"` is the cross-check).
     pub bang_engine: BangEngine,
 }
 

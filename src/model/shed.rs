@@ -249,24 +249,21 @@ impl Model {
     }
 
     /// Freezes settled pieces from the laid end: a piece whose nodes all move slower than
-    /// the freeze speed and that is not holding the coil is removed from the engine.
+    /// the freeze speed ([`Model::moved_speed`]) and that is not holding the coil is removed
+    /// from the engine.
     pub(super) fn freeze_settled(&mut self) {
         let min_free = usize::from(self.coil.body.is_some());
         while self.chain.free.len() > min_free {
             let oldest = self.chain.free[0];
+            if self.moved_speed(oldest) >= self.settings.freeze_speed {
+                break;
+            }
             let body = &self.world.bodies[oldest.body];
             let pose = *body.position();
             let nodes: Vec<Vector> = self
                 .piece_nodes(oldest)
                 .map(|n| pose.transform_point(n))
                 .collect();
-            let fastest = nodes
-                .iter()
-                .map(|&p| body.velocity_at_point(p).length())
-                .fold(0.0, f64::max);
-            if fastest >= self.settings.freeze_speed {
-                break;
-            }
             let kinetic = body.kinetic_energy();
             self.chain.frozen_potential_j += self.potential_of(body);
             // The last entry was the previous frozen piece's far node: this one's near node.

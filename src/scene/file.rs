@@ -70,7 +70,7 @@ const DEFAULT_JOINT_HZ: f64 = 1.0e7;
 /// Default `solver.bang_joint_hz`.
 const DEFAULT_BANG_JOINT_HZ: f64 = 1.0e9;
 /// Default `solver.bang_engine`.
-const DEFAULT_BANG_ENGINE: &str = "rapier";
+const DEFAULT_BANG_ENGINE: &str = "exact";
 /// Default `stop.max_time_s`.
 const DEFAULT_MAX_TIME_S: f64 = 60.0;
 /// Default `solver.bang_iterations`.
@@ -434,7 +434,7 @@ mod tests {
                 "solver.contact_hz" => "1e4",
                 "solver.joint_hz" => "1e7",
                 "solver.bang_joint_hz" => "1e9",
-                "solver.bang_engine" => "rapier",
+                "solver.bang_engine" => "exact",
                 "contact.model" => "spiral",
                 "stop.bang_radius_m" => "0.01",
                 "stop.max_time_s" => "60",

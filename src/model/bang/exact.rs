@@ -29,6 +29,11 @@ pub(in crate::model) struct ExactBang {
     pub(in crate::model) gravity_work_j: f64,
     /// What the joints took in the last step when they were made rigid (J).
     pub(in crate::model) caught_j: f64,
+    /// Each body's nodes in its own axes, from its centre of mass (m).
+    nodes: Vec<Vec<[f64; 2]>>,
+    /// The farthest any node of each body moved over the last step, over the step's length
+    /// (m/s): the motion the step realised, which freezing reads (see [`Model::moved_speed`]).
+    moved_m_s: Vec<f64>,
 }
 
 impl Model {
@@ -44,6 +49,7 @@ impl Model {
         let Some(exact) = self.exact.as_mut() else {
             return Vec::new();
         };
+        let before: Vec<Body> = exact.chain.bodies().to_vec();
         match exact.chain.step(dt, [gravity.x, gravity.y]) {
             Ok(report) => {
                 exact.stats.add(&report);
@@ -70,6 +76,18 @@ impl Model {
             body.set_linvel(Vector::new(b.velocity_m_s[0], b.velocity_m_s[1]), false);
             body.set_angvel(b.spin_rad_s, false);
         }
+        exact.moved_m_s = (exact.chain.bodies().iter().zip(&before))
+            .zip(&exact.nodes)
+            .map(|((now, was), nodes)| {
+                nodes
+                    .iter()
+                    .map(|&n| {
+                        let (a, b) = (now.point(n), was.point(n));
+                        (a[0] - b[0]).hypot(a[1] - b[1]) / dt
+                    })
+                    .fold(0.0, f64::max)
+            })
+            .collect();
         self.bang.solve = exact.stats;
         exact
             .chain
@@ -86,6 +104,32 @@ impl Model {
                 (exact.bodies[c.body], impulse)
             })
             .collect()
+    }
+
+    /// How fast `piece`'s fastest node moves (m/s), for freezing. On the exact chain it is the
+    /// motion the last step realised, its nodes' displacement over the step's length: the
+    /// velocity it holds at a whole step is not that. A piece resting on the floor ends each
+    /// of RATTLE's steps (see [`ExactChain`]) with the second half of gravity's kick still in
+    /// its velocity, which the next step's floor impulses take back before it moves: where
+    /// the kick turns it about a contact point rather than pressing it into the floor, the
+    /// end-of-step impulses leave it there, and the piece, at rest, would read a few mm/s.
+    pub(in crate::model) fn moved_speed(&self, piece: Piece) -> f64 {
+        let body = &self.world.bodies[piece.body];
+        let realised = self
+            .exact
+            .as_ref()
+            .filter(|_| self.on_exact_chain())
+            .and_then(|ex| {
+                let i = ex.bodies.iter().position(|&h| h == piece.body)?;
+                ex.moved_m_s.get(i).copied()
+            });
+        if let Some(speed) = realised {
+            return speed;
+        }
+        let pose = *body.position();
+        self.piece_nodes(piece)
+            .map(|n| body.velocity_at_point(pose.transform_point(n)).length())
+            .fold(0.0, f64::max)
     }
 
     /// The pin of the first moving piece, if it has one: its anchor in the world and in the
@@ -197,7 +241,14 @@ impl Model {
             friction: self.settings.friction,
         };
         chain.set_floor(floor, &points);
+        let nodes = free
+            .iter()
+            .zip(&centres)
+            .map(|(&p, &c)| self.piece_nodes(p).map(|n| at(n - c)).collect())
+            .collect();
         ExactBang {
+            nodes,
+            moved_m_s: Vec::new(),
             chain,
             bodies: handles,
             pin,
