@@ -10,7 +10,7 @@
 //! run stopped by SIGINT (Ctrl-C), SIGTERM or SIGHUP (its outputs are complete up to
 //! there, the signal named).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
@@ -85,14 +85,19 @@ enum Command {
     },
     /// Run every scene of a folder (the hard cases), verify the outputs, print a table; or,
     /// given a run's output folder (one with a report.json), verify that its files are sound
-    /// and belong to one run. Exit 0 when every case ends with a stated reason and sound
-    /// outputs, else 1.
+    /// and belong to one run; or, given a killed run's folder, say what it left. Exit 0 when
+    /// every case ends with a stated reason and sound outputs, else 1.
     Check {
         /// Folder of scene files (default: scenes/hard), or a run's output folder.
         dir: Option<PathBuf>,
         /// Output folder, one subfolder per case (default: runs/check).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Given a killed run's folder (`kill -9`, a crash): keep what it wrote. The samples
+        /// are cut after their last complete row, the log is finished as far as it reads, and
+        /// a report.json of kind "salvaged" says how far they go and what was lost.
+        #[arg(long)]
+        salvage: bool,
     },
     /// Run scenes and print the paradox table: milestone times of the simulation and of
     /// every competing equation of motion for each scene, as markdown.
@@ -114,7 +119,16 @@ use cli::exit::Exit;
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Check { dir, out } => check(dir, out),
+        Command::Check { dir, out, salvage } => match (salvage, dir) {
+            (true, Some(dir)) => salvage_run(&dir),
+            (true, None) => {
+                eprintln!(
+                    "error: --salvage needs a killed run's folder: uncoil check DIR --salvage"
+                );
+                Exit::BadInput.into()
+            }
+            (false, dir) => check(dir, out),
+        },
         Command::Sweep(args) => cli::sweep::sweep(args),
         Command::SweepReport(args) => cli::sweep::report(&args),
         Command::Plot { dir } => match uncoil::study::plot::plot_run(&dir) {
@@ -249,6 +263,9 @@ fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> ExitCode {
                 "{}: the files are sound and belong to one run",
                 dir.display()
             );
+            if let Some(line) = check::salvage::describe(&dir) {
+                println!("{}: {line}", dir.display());
+            }
             return Exit::Ok.into();
         }
         return Exit::Failed.into();
@@ -283,6 +300,35 @@ fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> ExitCode {
         Exit::Ok.into()
     } else {
         Exit::Failed.into()
+    }
+}
+
+/// `uncoil check DIR --salvage`: keeps what a killed run wrote (see
+/// [`check::salvage`]). Exit 0 when salvaged, 2 when `DIR` is not a killed run's folder,
+/// 1 when there is nothing to keep or a file could not be written.
+fn salvage_run(dir: &Path) -> ExitCode {
+    use check::salvage::SalvageError;
+    match check::salvage::salvage(dir) {
+        Ok(s) => {
+            for f in &s.written {
+                println!("wrote {}", f.display());
+            }
+            if let Some(line) = check::salvage::describe(dir) {
+                println!("{}: {line}", dir.display());
+            }
+            for line in &s.report.lost {
+                println!("{}: lost: {line}", dir.display());
+            }
+            Exit::Ok.into()
+        }
+        Err(e @ SalvageError::NotKilled(_)) => {
+            eprintln!("error: {e}");
+            Exit::BadInput.into()
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            Exit::Failed.into()
+        }
     }
 }
 

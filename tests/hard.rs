@@ -251,6 +251,164 @@ fn a_killed_run_leaves_only_partial_files() {
 }
 
 #[test]
+fn a_second_signal_ends_the_run_at_once_and_leaves_its_partial_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("uncoil"))
+        .arg("run")
+        .arg(hard_path("thin-300"))
+        .arg("--out")
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let partial = out.join("samples.csv.partial");
+    let start = Instant::now();
+    while std::fs::metadata(&partial).map_or(0, |m| m.len()) < 20_000 {
+        assert!(child.try_wait().unwrap().is_none(), "the run ended first");
+        assert!(start.elapsed() < Duration::from_secs(120), "no rows");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // Two different signals, sent back to back, are both delivered (two of the same may
+    // merge into one): the first raises the stop flag, the second, finding it up, ends the
+    // process before it finishes its files, as a user's second Ctrl-C means.
+    let sent = std::process::Command::new("sh")
+        .args(["-c", "kill -INT $0; kill -TERM $0"])
+        .arg(child.id().to_string())
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let code = child.wait().unwrap().code();
+    assert!(matches!(code, Some(130 | 143)), "exit {code:?}");
+    assert!(partial.exists() && out.join("run.mcap.partial").exists());
+    for name in ["samples.csv", "report.json", "run.mcap"] {
+        assert!(!out.join(name).exists(), "{name} was finished");
+    }
+}
+
+/// Each topic's messages of a finished `run.mcap`: (log time, bytes), in order.
+fn messages_by_topic(path: &Path) -> std::collections::BTreeMap<String, Vec<(u64, Vec<u8>)>> {
+    let bytes = std::fs::read(path).unwrap();
+    let mut by_topic: std::collections::BTreeMap<String, Vec<(u64, Vec<u8>)>> =
+        std::collections::BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        by_topic
+            .entry(m.channel.topic.clone())
+            .or_default()
+            .push((m.log_time, m.data.into_owned()));
+    }
+    by_topic
+}
+
+#[test]
+fn a_killed_run_is_salvaged_into_a_prefix_of_the_run_it_was() {
+    let dir = tempfile::tempdir().unwrap();
+    let thin = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/thin-tape.toml");
+    // The thin tape to 25 s simulated: a few seconds, and logs of several chunks.
+    let run = |out: &Path| {
+        std::process::Command::new(assert_cmd::cargo::cargo_bin("uncoil"))
+            .arg("run")
+            .arg(&thin)
+            .args(["--set", "stop.max_time_s=25", "--out"])
+            .arg(out)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap()
+    };
+    let full = dir.path().join("full");
+    assert!(run(&full).wait().unwrap().success());
+    let full_samples = std::fs::read(full.join("samples.csv")).unwrap();
+    let full_log = messages_by_topic(&full.join("run.mcap"));
+    // Killed at three moments, when the samples first pass these sizes: early, midway, late.
+    let mut logs_kept = 0;
+    for (i, at) in [2_000_000_u64, 9_000_000, 17_000_000]
+        .into_iter()
+        .enumerate()
+    {
+        assert!(at < full_samples.len() as u64);
+        let out = dir.path().join(format!("killed-{i}"));
+        let mut child = run(&out);
+        let partial = out.join("samples.csv.partial");
+        let start = Instant::now();
+        while std::fs::metadata(&partial).map_or(0, |m| m.len()) < at {
+            assert!(
+                child.try_wait().unwrap().is_none(),
+                "the run ended before it could be killed"
+            );
+            assert!(start.elapsed() < Duration::from_secs(120), "no rows");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        child.kill().unwrap();
+        child.wait().unwrap();
+        let assert = Command::cargo_bin("uncoil")
+            .unwrap()
+            .args(["check", "--salvage"])
+            .arg(&out)
+            .assert()
+            .code(0);
+        let said = String::from_utf8_lossy(&assert.get_output().stdout).into_owned();
+        assert!(said.contains("a killed run, salvaged: "), "{said}");
+        // Every byte kept is the uninterrupted run's, to the end of a row.
+        let kept = std::fs::read(out.join("samples.csv")).unwrap();
+        assert!(
+            kept.len() as u64 >= at - 100_000,
+            "{} bytes kept",
+            kept.len()
+        );
+        assert!(kept.len() < full_samples.len() && kept.ends_with(b"\n"));
+        assert!(kept == full_samples[..kept.len()], "kill {i}: not a prefix");
+        // Every message kept is the uninterrupted run's, each topic from its start; a run
+        // killed before its log finished a chunk keeps none, and says so.
+        let log = messages_by_topic(&out.join("run.mcap"));
+        logs_kept += usize::from(!log.is_empty());
+        if log.is_empty() {
+            let needle = "before the log finished its first chunk";
+            assert!(said.contains(needle), "kill {i}: {said}");
+        }
+        for (topic, messages) in &log {
+            let whole = &full_log[topic];
+            assert!(messages.len() < whole.len(), "{topic}");
+            assert!(messages[..] == whole[..messages.len()], "kill {i}: {topic}");
+        }
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+        assert_eq!(report["kind"], "salvaged");
+        let rows = kept.iter().filter(|&&b| b == b'\n').count() - 1;
+        assert_eq!(report["rows"], rows);
+        assert_eq!(verify_outputs(&out), Vec::<String>::new());
+        let left: Vec<_> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".partial") || n.ends_with(".salvage"))
+            .collect();
+        assert!(left.is_empty(), "{left:?} left behind");
+        // `uncoil check` on it: sound, and says what it is.
+        let assert = Command::cargo_bin("uncoil")
+            .unwrap()
+            .arg("check")
+            .arg(&out)
+            .assert()
+            .code(0);
+        let said = String::from_utf8_lossy(&assert.get_output().stdout).into_owned();
+        assert!(said.contains("sound and belong to one run"), "{said}");
+        // A second salvage is refused: the run has its report now.
+        Command::cargo_bin("uncoil")
+            .unwrap()
+            .args(["check", "--salvage"])
+            .arg(&out)
+            .assert()
+            .code(2);
+    }
+    assert!(
+        logs_kept >= 2,
+        "only {logs_kept} of the killed runs kept messages"
+    );
+}
+
+#[test]
 fn check_runs_a_folder_and_tabulates_every_outcome() {
     let dir = tempfile::tempdir().unwrap();
     let scenes = dir.path().join("scenes");

@@ -20,6 +20,7 @@ use crate::scene::Scene;
 use crate::scene::folded;
 
 mod crashed;
+pub mod salvage;
 
 pub use crashed::crashed_run;
 
@@ -141,11 +142,13 @@ pub fn verify_outputs(dir: &Path) -> Vec<String> {
         }
     }
     let report = std::fs::read_to_string(dir.join(folder::REPORT));
-    let chain = report.as_ref().is_ok_and(|text| {
-        serde_json::from_str::<serde_json::Value>(text)
-            .is_ok_and(|v| v.get("kind").and_then(|k| k.as_str()) == Some(folded::KIND))
-    });
-    let columns: Vec<String> = if chain {
+    let kind = report
+        .as_ref()
+        .ok()
+        .and_then(|text| serde_json::from_str::<serde_json::Value>(text).ok())
+        .map(|v| ReportKind::of(&v))
+        .unwrap_or(ReportKind::Coil);
+    let columns: Vec<String> = if matches!(kind, ReportKind::Chain | ReportKind::Salvaged(true)) {
         chain_columns()
     } else {
         CSV_COLUMNS.iter().map(|c| (*c).to_owned()).collect()
@@ -155,12 +158,46 @@ pub fn verify_outputs(dir: &Path) -> Vec<String> {
         Err(e) => problems.push(format!("{}: {e}", folder::SAMPLES)),
     }
     match report {
-        Ok(text) if chain => problems.extend(chain_report_problem(&text)),
-        Ok(text) => problems.extend(report_problem(&text)),
+        Ok(text) => problems.extend(match kind {
+            ReportKind::Coil => report_problem(&text),
+            ReportKind::Chain => chain_report_problem(&text),
+            ReportKind::Salvaged(_) => salvage_report_problem(&text),
+        }),
         Err(e) => problems.push(format!("{}: {e}", folder::REPORT)),
     }
     problems.extend(folder::mismatches(dir));
     problems
+}
+
+/// Whose `report.json` a folder has, as its `kind` says.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ReportKind {
+    /// A coil's run (no `kind`).
+    Coil,
+    /// A folded chain's run.
+    Chain,
+    /// A killed run's, salvaged ([`salvage`]): its samples are a coil's
+    /// or a folded chain's, as `samples_of` says.
+    Salvaged(bool),
+}
+
+impl ReportKind {
+    fn of(report: &serde_json::Value) -> Self {
+        match report.get("kind").and_then(|k| k.as_str()) {
+            Some(folded::KIND) => Self::Chain,
+            Some(salvage::KIND) => Self::Salvaged(
+                report.get("samples_of").and_then(|k| k.as_str()) == Some(folded::KIND),
+            ),
+            _ => Self::Coil,
+        }
+    }
+}
+
+/// Why a salvaged run's `report.json` does not read back as a [`salvage::SalvageReport`].
+fn salvage_report_problem(text: &str) -> Option<String> {
+    serde_json::from_str::<salvage::SalvageReport>(text)
+        .err()
+        .map(|e| format!("report.json: a salvaged run's report does not read back: {e}"))
 }
 
 /// Why `report.json`'s text does not read back as a [`RunReport`], naming the field: serde

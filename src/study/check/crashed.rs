@@ -47,10 +47,12 @@ pub fn crashed_run(dir: &Path) -> Option<Vec<String>> {
     let samples = partial_path(&dir.join(folder::SAMPLES));
     if samples.exists() {
         lines.push(match complete_rows(&samples) {
-            Ok((0, _)) => format!("{}.partial: no complete row", folder::SAMPLES),
-            Ok((rows, t)) => format!(
-                "{}.partial: {rows} complete rows, up to t = {t} s simulated",
-                folder::SAMPLES
+            Ok(cut) if cut.rows == 0 => format!("{}.partial: no complete row", folder::SAMPLES),
+            Ok(cut) => format!(
+                "{}.partial: {} complete rows, up to t = {} s simulated",
+                folder::SAMPLES,
+                cut.rows,
+                cut.t_s
             ),
             Err(e) => format!("{}.partial: not readable: {e:#}", folder::SAMPLES),
         });
@@ -84,13 +86,31 @@ pub fn crashed_run(dir: &Path) -> Option<Vec<String>> {
             }
         ));
     }
+    if !running && samples.exists() {
+        lines.push(format!(
+            "to keep what it wrote: uncoil check {} --salvage",
+            dir.display()
+        ));
+    }
     Some(lines)
 }
 
+/// The complete rows of a cut `samples.csv`.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Cut {
+    /// The header's columns.
+    pub header: Vec<String>,
+    /// Complete rows: ended by a newline, with every column, the first a number.
+    pub rows: u64,
+    /// The simulated time of the last (its first column, `t_s`; 0 with no row).
+    pub t_s: f64,
+    /// Where the last complete row ends (bytes from the start of the file).
+    pub end_byte: u64,
+}
+
 /// The complete rows of a cut `samples.csv` (a coil's or a folded chain's: those ended by a
-/// newline, with every column), read with the `csv` crate, and the simulated time of the
-/// last (its first column, `t_s`).
-fn complete_rows(path: &Path) -> anyhow::Result<(usize, f64)> {
+/// newline, with every column), read with the `csv` crate.
+pub(super) fn complete_rows(path: &Path) -> anyhow::Result<Cut> {
     let bytes = std::fs::read(path)?;
     let ended = bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
     let mut reader = csv::Reader::from_reader(&bytes[..ended]);
@@ -99,16 +119,22 @@ fn complete_rows(path: &Path) -> anyhow::Result<(usize, f64)> {
         header.get(0) == Some("t_s"),
         "its header does not start with t_s"
     );
-    let (mut rows, mut t) = (0, 0.0);
-    for record in reader.records() {
-        let Ok(record) = record else { break };
+    let mut cut = Cut {
+        header: header.iter().map(str::to_owned).collect(),
+        rows: 0,
+        t_s: 0.0,
+        end_byte: reader.position().byte(),
+    };
+    let mut record = csv::StringRecord::new();
+    while let Ok(true) = reader.read_record(&mut record) {
         match record.get(0).map(str::parse::<f64>) {
             Some(Ok(t_s)) if record.len() == header.len() => {
-                rows += 1;
-                t = t_s;
+                cut.rows += 1;
+                cut.t_s = t_s;
+                cut.end_byte = reader.position().byte();
             }
             _ => break,
         }
     }
-    Ok((rows, t))
+    Ok(cut)
 }

@@ -80,6 +80,12 @@ impl WrittenRun {
         let report_path = dir.join(REPORT);
         let text = std::fs::read_to_string(&report_path)
             .with_context(|| format!("cannot read {}", report_path.display()))?;
+        anyhow::ensure!(
+            crate::study::check::salvage::describe(dir).is_none(),
+            "{}: a killed run's, salvaged: the pictures need what a run books at its end (its \
+             ledger, bang and references); its {SAMPLES} reads as any run's",
+            report_path.display()
+        );
         let mut de = serde_json::Deserializer::from_str(&text);
         let report: RunReport = serde_path_to_error::deserialize(&mut de).map_err(|e| {
             anyhow::anyhow!(
