@@ -137,6 +137,13 @@ fn sweep_shards_merge_and_report() {
         .stdout(predicate::str::contains("merged 2 runs into"));
     let merged = SweepTable::read(&shards.join("sweep.csv")).unwrap();
     assert_eq!(merged.header, t.header);
+    // Each file states its grid beside it; the merge states the whole grid, as the full
+    // sweep's does.
+    let grid = |p: &Path| uncoil::study::sweep::read_grid(&p.join("sweep.grid.json")).unwrap();
+    assert_eq!(grid(&shards), grid(&full));
+    assert_eq!(grid(&full).combinations, 2);
+    let shard_grid = uncoil::study::sweep::read_grid(&shards.join("sweep.2-of-2.grid.json"));
+    assert_eq!(shard_grid.unwrap().shard, Some([2, 2]));
     assert_eq!(
         deterministic(&merged),
         deterministic(&t),
@@ -160,6 +167,26 @@ fn sweep_shards_merge_and_report() {
         deterministic(&t),
         "a resumed sweep differs from the uninterrupted one"
     );
+    // --resume of another grid into the folder is refused and changes nothing.
+    uncoil()
+        .arg("sweep")
+        .arg(yoga())
+        .args(["--vary", "discretisation.links_per_turn=8,12"])
+        .args([
+            "--vary",
+            "stop.bang_cap_s=0",
+            "--resume",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&resumed)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains(
+            "is of another grid (--vary discretisation.links_per_turn=8,16",
+        ));
+    let after = SweepTable::read(&resumed.join("sweep.csv")).unwrap();
+    assert_eq!(after, again, "a refused resume changed the file");
     // A shard not given: refused, naming it, nothing written; written with --allow-partial,
     // which says what is missing.
     let partial = dir.path().join("partial");
@@ -185,7 +212,7 @@ fn sweep_shards_merge_and_report() {
         .stdout(predicate::str::contains("shards missing: 2 of 2"));
     let note = std::fs::read_to_string(partial.join("sweep.missing.txt")).unwrap();
     assert!(note.contains("shards missing: 2 of 2"), "{note}");
-    // A combination found twice is refused.
+    // A combination found twice is refused: not shards of one sweep, bad input.
     uncoil()
         .args(["sweep", "--merge"])
         .arg(&s1)
@@ -193,7 +220,7 @@ fn sweep_shards_merge_and_report() {
         .arg("--out")
         .arg(dir.path().join("twice"))
         .assert()
-        .code(1)
+        .code(2)
         .stderr(predicate::str::contains("combination 0 is in both"));
 
     // The report: Markdown on stdout and in report.md, and the SVGs.

@@ -13,7 +13,7 @@ use uncoil::output::write_atomic;
 use uncoil::run::signals;
 use uncoil::study::analysis::{Reference, SweepAnalysis};
 use uncoil::study::sweep::{
-    Col, Shard, Sweep, SweepOptions, SweepTable, Vary, merge, write_merged,
+    Col, NotOneSweep, Shard, Sweep, SweepOptions, SweepTable, Vary, merge, write_merged,
 };
 
 /// Arguments of `uncoil sweep`.
@@ -128,13 +128,19 @@ fn folder_of(p: &Path) -> PathBuf {
 /// `uncoil sweep --merge`: 0 merged (whole, or partial with `--allow-partial`), 1 a file
 /// could not be read or written, or something is missing without `--allow-partial`.
 fn merge_command(files: &[PathBuf], dir: &Path, allow_partial: bool) -> ExitCode {
-    let (table, missing) = match merge(files) {
+    let merged = match merge(files) {
         Ok(m) => m,
         Err(e) => {
             eprintln!("error: {e:#}");
-            return Exit::Failed.into();
+            return if e.downcast_ref::<NotOneSweep>().is_some() {
+                Exit::BadInput
+            } else {
+                Exit::Failed
+            }
+            .into();
         }
     };
+    let (table, missing) = (&merged.table, &merged.missing);
     let note = dir.join("sweep.missing.txt");
     if !missing.is_empty() && !allow_partial {
         eprint!(
@@ -142,7 +148,7 @@ fn merge_command(files: &[PathBuf], dir: &Path, allow_partial: bool) -> ExitCode
         );
         return Exit::Failed.into();
     }
-    let written = write_merged(&table, dir).and_then(|p| {
+    let written = write_merged(&merged, dir).and_then(|p| {
         if missing.is_empty() {
             uncoil::output::remove_stale(&note)?;
         } else {
@@ -166,7 +172,7 @@ fn merge_command(files: &[PathBuf], dir: &Path, allow_partial: bool) -> ExitCode
 }
 
 /// `uncoil sweep`: 0 every run ended, 1 a run failed or a file could not be written,
-/// 2 bad input (a combination's scene is invalid), 3 a guard stopped a run (and none
+/// 2 bad input (a combination's scene is invalid; files that are not of one sweep, to merge or resume), 3 a guard stopped a run (and none
 /// failed), 130, 143 or 129 a signal stopped it (SIGINT, SIGTERM, SIGHUP: the runs in
 /// progress are rows marked `interrupted`, which `--resume` runs again).
 pub fn sweep(args: SweepArgs) -> ExitCode {
@@ -265,7 +271,11 @@ pub fn sweep(args: SweepArgs) -> ExitCode {
         }
         Err(e) => {
             eprintln!("error: {e:#}");
-            Exit::Failed.into()
+            if e.downcast_ref::<NotOneSweep>().is_some() {
+                Exit::BadInput.into()
+            } else {
+                Exit::Failed.into()
+            }
         }
     }
 }

@@ -25,12 +25,14 @@ use std::time::Instant;
 use anyhow::Context as _;
 use rayon::prelude::*;
 
-pub use self::grid::{Combination, CombinationError, Shard, Vary, file_name, grid, scenes};
+pub use self::grid::{
+    Combination, CombinationError, GridFile, Shard, Vary, file_name, grid, scenes,
+};
 pub use self::row::{
     Col, ERR_EQ7_PREFIX, ERR_GEO_PREFIX, INDEX_COLUMN, RowStatus, STATUS_COLUMN, header,
     result_cells, result_columns,
 };
-pub use self::table::{Missing, SweepTable, csv_line, merge, write_merged};
+pub use self::table::{Merged, Missing, NotOneSweep, SweepTable, csv_line, merge, write_merged};
 
 use self::grid::settings;
 use self::row::one_line;
@@ -90,6 +92,8 @@ pub struct Sweep {
     keys: Vec<String>,
     combos: Vec<Combination>,
     scenes: Vec<Scene>,
+    /// The grid as its files state it (its shard set by each run).
+    grid: GridFile,
 }
 
 impl Sweep {
@@ -101,6 +105,7 @@ impl Sweep {
             keys: varies.iter().map(|v| v.key.clone()).collect(),
             combos,
             scenes,
+            grid: GridFile::new(text, name, varies, Shard::ALL),
         })
     }
 
@@ -125,11 +130,30 @@ impl Sweep {
             .map(|(l, _)| l.to_string())
             .collect();
         let header = header(&self.keys, &labels);
+        let grid = GridFile {
+            shard: (opts.shard != Shard::ALL).then_some([opts.shard.k, opts.shard.n]),
+            ..self.grid.clone()
+        };
+        let grid_path = GridFile::beside(&path);
+        if opts.resume && grid_path.exists() {
+            let theirs = read_grid(&grid_path)?;
+            if !theirs.same_grid(&grid) {
+                return Err(NotOneSweep(format!(
+                    "{} is of another grid ({}; the file's first, this sweep's second): --resume \
+                     continues only the sweep that wrote it (remove it to start again)",
+                    path.display(),
+                    theirs.difference(&grid)
+                ))
+                .into());
+            }
+        }
         let kept = if opts.resume && path.exists() {
             finished_rows(&path, &header)?
         } else {
             BTreeMap::new()
         };
+        let grid_text = serde_json::to_string_pretty(&grid).context("cannot write the grid")?;
+        crate::output::write_atomic(&grid_path, grid_text.as_bytes())?;
         let file = start_file(&path, &header, kept.values())?;
 
         let mine: Vec<usize> = (0..self.combos.len())
@@ -176,6 +200,13 @@ impl Sweep {
     }
 }
 
+/// Reads the grid a sweep's file states (see [`GridFile`]).
+pub fn read_grid(path: &Path) -> anyhow::Result<GridFile> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("{}: not a sweep's grid", path.display()))
+}
+
 /// Creates `path` and writes the header line and the `kept` rows, flushed.
 fn start_file<'a>(
     path: &Path,
@@ -199,11 +230,13 @@ fn start_file<'a>(
 /// last row cut mid-row is left out). The file must be of this sweep: its header `header`.
 fn finished_rows(path: &Path, header: &[String]) -> anyhow::Result<BTreeMap<usize, Vec<String>>> {
     let (table, _) = SweepTable::read_cut(path)?;
-    anyhow::ensure!(
-        table.header == header,
-        "{}: its columns are not this sweep's: it cannot be resumed (remove it to start again)",
-        path.display()
-    );
+    if table.header != header {
+        return Err(NotOneSweep(format!(
+            "{}: its columns are not this sweep's: it cannot be resumed (remove it to start again)",
+            path.display()
+        ))
+        .into());
+    }
     let status = table.column(STATUS_COLUMN).expect("the header has it");
     Ok(table
         .rows

@@ -1,7 +1,9 @@
 //! The grid of a sweep: `--vary KEY=V1,V2,...` ([`Vary`]), their product
 //! ([`grid`]), the scene of every combination, validated before any run, and the shards
-//! (`--shard K/N`) with their file names. It runs nothing and writes nothing.
+//! (`--shard K/N`) with their file names, and the grid as its files state it
+//! ([`GridFile`]). It runs nothing and writes nothing.
 
+use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
 use crate::scene::overrides::{Override, OverrideSyntaxError, check_key, scene_with_overrides};
@@ -161,6 +163,92 @@ pub fn file_name(shard: Shard) -> String {
     }
 }
 
+/// The grid a sweep's file belongs to, written beside it (`sweep.csv` ->
+/// `sweep.grid.json`, `sweep.2-of-4.csv` -> `sweep.2-of-4.grid.json`) before its first row:
+/// what a merge needs and the rows cannot show, the grid's size (a combination missing at
+/// its end, or a whole shard's block, is named) and whether two files are of one sweep.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct GridFile {
+    /// The scene's name.
+    pub scene: String,
+    /// FNV-1a of the scene's text before the grid's overrides, in hex.
+    pub scene_fnv1a: String,
+    /// Each varied key and its values as given, in `--vary` order.
+    pub vary: Vec<(String, Vec<String>)>,
+    /// Combinations in the whole grid.
+    pub combinations: usize,
+    /// This file's shard, `[K, N]` (`None`: the whole grid, or a merge).
+    pub shard: Option<[usize; 2]>,
+}
+
+impl GridFile {
+    /// The grid of `varies` over the scene `name` of text `text`, for `shard`'s file.
+    pub fn new(text: &str, name: &str, varies: &[Vary], shard: Shard) -> Self {
+        Self {
+            scene: name.to_owned(),
+            scene_fnv1a: format!("{:016x}", crate::output::folder::fnv1a(text.as_bytes())),
+            vary: varies
+                .iter()
+                .map(|v| {
+                    (
+                        v.key.clone(),
+                        v.values.iter().map(|o| o.raw.clone()).collect(),
+                    )
+                })
+                .collect(),
+            combinations: grid(varies).len(),
+            shard: (shard != Shard::ALL).then_some([shard.k, shard.n]),
+        }
+    }
+
+    /// Where the grid of the sweep file `csv` is written.
+    pub fn beside(csv: &Path) -> PathBuf {
+        let name = csv.file_name().unwrap_or_default().to_string_lossy();
+        let stem = name.strip_suffix(".csv").unwrap_or(&name);
+        csv.with_file_name(format!("{stem}.grid.json"))
+    }
+
+    /// Whether `other` is the same grid (its shard aside).
+    pub fn same_grid(&self, other: &GridFile) -> bool {
+        (
+            &self.scene,
+            &self.scene_fnv1a,
+            &self.vary,
+            self.combinations,
+        ) == (
+            &other.scene,
+            &other.scene_fnv1a,
+            &other.vary,
+            other.combinations,
+        )
+    }
+
+    /// What differs from `other`, in words (empty if the grids are the same).
+    pub fn difference(&self, other: &GridFile) -> String {
+        if self.scene != other.scene {
+            format!("scene {} against {}", self.scene, other.scene)
+        } else if self.scene_fnv1a != other.scene_fnv1a {
+            format!("scene {}'s text differs", self.scene)
+        } else if self.vary != other.vary {
+            let show = |g: &GridFile| {
+                g.vary
+                    .iter()
+                    .map(|(k, v)| format!("{k}={}", v.join(",")))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            };
+            format!("--vary {} against {}", show(self), show(other))
+        } else if self.combinations != other.combinations {
+            format!(
+                "{} combinations against {}",
+                self.combinations, other.combinations
+            )
+        } else {
+            String::new()
+        }
+    }
+}
+
 /// `list` split at its commas outside brackets, braces and quotes: a TOML array or table,
 /// or a quoted string with a comma, is one value.
 fn split_top_level(list: &str) -> Vec<&str> {
@@ -189,6 +277,31 @@ mod tests {
 
     fn vary(arg: &str) -> Vary {
         arg.parse().unwrap()
+    }
+
+    #[test]
+    fn a_grid_file_sits_beside_its_csv_and_compares_grids_not_shards() {
+        assert_eq!(
+            GridFile::beside(Path::new("d/sweep.2-of-4.csv")),
+            Path::new("d/sweep.2-of-4.grid.json")
+        );
+        assert_eq!(
+            GridFile::beside(Path::new("sweep.csv")),
+            Path::new("sweep.grid.json")
+        );
+        let v = [vary("a.b=1,2,3"), vary("c.d=x,y")];
+        let one = GridFile::new("t", "s", &v, Shard { k: 1, n: 2 });
+        let two = GridFile::new("t", "s", &v, Shard { k: 2, n: 2 });
+        assert_eq!(one.combinations, 6);
+        assert!(one.same_grid(&two) && one.difference(&two).is_empty());
+        let other = GridFile::new("t", "s", &v[..1], Shard::ALL);
+        assert!(!one.same_grid(&other));
+        assert!(
+            one.difference(&other)
+                .contains("--vary a.b=1,2,3 c.d=x,y against a.b=1,2,3")
+        );
+        let text = GridFile::new("u", "s", &v, Shard::ALL);
+        assert!(one.difference(&text).contains("text differs"));
     }
 
     #[test]

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 
-use super::{Col, INDEX_COLUMN, Shard, file_name};
+use super::{Col, GridFile, INDEX_COLUMN, Shard, file_name, read_grid};
 use crate::output::write_atomic;
 
 /// One CSV line (no line break) of `cells`, quoted where a cell needs it (the `csv`
@@ -196,34 +196,73 @@ fn shard_of(path: &Path) -> Option<Shard> {
     })
 }
 
+/// Files that are not shards of one sweep: different columns or grids, shards of
+/// different splits, a combination in two files or outside its file's shard. Bad input,
+/// not a failed merge.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct NotOneSweep(pub String);
+
+/// A merge: the table, what is missing from it, and the grid its files state.
+#[derive(Debug, Clone)]
+pub struct Merged {
+    /// The rows of every file, sorted by `index`.
+    pub table: SweepTable,
+    /// What is missing (see [`Missing`]).
+    pub missing: Missing,
+    /// The grid the files' [`GridFile`]s state (`None`: no file had one).
+    pub grid: Option<GridFile>,
+}
+
 /// Joins shard files into one table sorted by `index`, and says what is missing (see
 /// [`Missing`]). Every file must have the same header; an index found twice is an error (a
 /// shard run twice, or the same file given twice), as is an index that is not its file's
-/// shard's or shard files of different `N`. A file's last row cut short (its writer killed
-/// mid-row) is left out and reported. The files do not state the grid's size: the rows show
-/// it as the product of the values each varied key takes in them, so a combination missing at
-/// the grid's end is found unless every row of some value is missing too.
-pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<(SweepTable, Missing)> {
+/// shard's or shard files of different `N` ([`NotOneSweep`]). A file's last row cut short
+/// (its writer killed mid-row) is left out and reported. The grid's size comes from the
+/// [`GridFile`]s beside the files, which must all state the same grid; for files without
+/// one, the rows show it as the product of the values each varied key takes in them, so a
+/// combination missing at the grid's end is found unless every row of some value is
+/// missing too.
+pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<Merged> {
     anyhow::ensure!(!inputs.is_empty(), "nothing to merge");
+    let not_one = |text: String| anyhow::Error::new(NotOneSweep(text));
     let mut merged: Option<SweepTable> = None;
     let mut seen: BTreeMap<usize, PathBuf> = BTreeMap::new();
     let mut missing = Missing::default();
     let mut shards: BTreeMap<usize, usize> = BTreeMap::new();
+    let mut grid: Option<(GridFile, PathBuf)> = None;
     for path in inputs {
         let (t, cut) = SweepTable::read_cut(path)?;
         if cut {
             missing.cut.push((path.clone(), t.rows.len()));
         }
+        let grid_path = GridFile::beside(path);
+        if grid_path.exists() {
+            let g = read_grid(&grid_path)?;
+            match &grid {
+                Some((first, from)) if !first.same_grid(&g) => {
+                    return Err(not_one(format!(
+                        "{} and {} are of different grids ({}): not shards of one sweep",
+                        from.display(),
+                        path.display(),
+                        first.difference(&g)
+                    )));
+                }
+                Some(_) => {}
+                None => grid = Some((g, path.clone())),
+            }
+        }
         let ic = t
             .column(INDEX_COLUMN)
             .with_context(|| format!("{}: no `{INDEX_COLUMN}` column", path.display()))?;
-        if let Some(m) = &merged {
-            anyhow::ensure!(
-                m.header == t.header,
+        if let Some(m) = &merged
+            && m.header != t.header
+        {
+            return Err(not_one(format!(
                 "{}: its columns differ from those of {} (not shards of one sweep)",
                 path.display(),
                 inputs[0].display()
-            );
+            )));
         }
         let shard = shard_of(path);
         if let Some(s) = shard {
@@ -233,21 +272,31 @@ pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<(SweepTable, Missing)> {
             let i: usize = r[ic].parse().with_context(|| {
                 format!("{}: `{}` is not a combination index", path.display(), r[ic])
             })?;
-            if let Some(s) = shard {
-                anyhow::ensure!(
-                    s.contains(i),
+            if let Some(s) = shard
+                && !s.contains(i)
+            {
+                return Err(not_one(format!(
                     "{}: combination {i} is not in shard {} of {}",
                     path.display(),
                     s.k,
                     s.n
-                );
+                )));
+            }
+            if let Some((g, _)) = &grid
+                && i >= g.combinations
+            {
+                return Err(not_one(format!(
+                    "{}: combination {i} is not in its grid of {}",
+                    path.display(),
+                    g.combinations
+                )));
             }
             if let Some(first) = seen.insert(i, path.clone()) {
-                anyhow::bail!(
+                return Err(not_one(format!(
                     "combination {i} is in both {} and {}",
                     first.display(),
                     path.display()
-                );
+                )));
             }
         }
         match &mut merged {
@@ -256,29 +305,36 @@ pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<(SweepTable, Missing)> {
         }
     }
     let ns: std::collections::BTreeSet<usize> = shards.values().copied().collect();
-    anyhow::ensure!(
-        ns.len() <= 1,
-        "the files are shards of different splits (of {})",
-        ns.iter()
-            .map(ToString::to_string)
-            .collect::<Vec<_>>()
-            .join(", of ")
-    );
+    if ns.len() > 1 {
+        return Err(not_one(format!(
+            "the files are shards of different splits (of {})",
+            ns.iter()
+                .map(ToString::to_string)
+                .collect::<Vec<_>>()
+                .join(", of ")
+        )));
+    }
     if let Some(&n) = ns.first() {
         let absent = (1..=n).filter(|k| !shards.contains_key(k)).collect();
         missing.shards = Some((n, absent));
     }
     let mut m = merged.expect("at least one input");
-    // The files do not state the grid's size; the rows show it, but for a value of a varied
-    // key whose every row is missing.
     let end = seen.keys().next_back().map_or(0, |&last| last + 1);
-    let grid = grid_size(&m).unwrap_or(0).max(end);
-    missing.combinations = (0..grid).filter(|i| !seen.contains_key(i)).collect();
+    let size = match &grid {
+        Some((g, _)) => g.combinations,
+        None => grid_size(&m).unwrap_or(0).max(end),
+    };
+    missing.combinations = (0..size).filter(|i| !seen.contains_key(i)).collect();
     let ic = m.column(INDEX_COLUMN).expect("checked above");
     m.rows
         .sort_by_key(|r| r[ic].parse::<usize>().unwrap_or(usize::MAX));
-    Ok((m, missing))
+    Ok(Merged {
+        table: m,
+        missing,
+        grid: grid.map(|(g, _)| GridFile { shard: None, ..g }),
+    })
 }
+
 /// The size of the grid `t`'s rows come from: the product over the varied keys' columns
 /// (those between `index` and `links`) of the values its rows hold, a number however it is
 /// spelt (`0.1`, `0.10`). `None` for a table without result columns, whose keys are not
@@ -302,12 +358,21 @@ fn grid_size(t: &SweepTable) -> Option<usize> {
     )
 }
 
-/// Writes a merged table to `dir/sweep.csv` (atomically) and returns the path.
-pub fn write_merged(table: &SweepTable, dir: &Path) -> anyhow::Result<PathBuf> {
+/// Writes a merge to `dir/sweep.csv` (atomically), with the grid its files stated beside it
+/// (`sweep.grid.json`, see [`GridFile`]), and returns the CSV's path.
+pub fn write_merged(merged: &Merged, dir: &Path) -> anyhow::Result<PathBuf> {
     std::fs::create_dir_all(dir)
         .with_context(|| format!("cannot create output folder {}", dir.display()))?;
     let path = dir.join(file_name(Shard::ALL));
-    write_atomic(&path, table.to_csv().as_bytes())?;
+    let grid_path = GridFile::beside(&path);
+    match &merged.grid {
+        Some(g) => {
+            let text = serde_json::to_string_pretty(g).context("cannot write the grid")?;
+            write_atomic(&grid_path, text.as_bytes())?;
+        }
+        None => crate::output::remove_stale(&grid_path)?,
+    }
+    write_atomic(&path, merged.table.to_csv().as_bytes())?;
     Ok(path)
 }
 
@@ -340,13 +405,14 @@ mod tests {
         let d = dir.path();
         let a = write(d, "a.csv", "index,k,status\n2,x,ok\n0,y,\"failed: a, b\"\n");
         let b = write(d, "b.csv", "index,k,status\n1,z,ok\n");
-        let (m, missing) = merge(&[a.clone(), b.clone()]).unwrap();
+        let merged = merge(&[a.clone(), b.clone()]).unwrap();
+        let (m, missing) = (&merged.table, &merged.missing);
         assert!(missing.is_empty(), "{missing}");
         let idx: Vec<&str> = m.rows.iter().map(|r| r[0].as_str()).collect();
         assert_eq!(idx, ["0", "1", "2"]);
         assert_eq!(m.rows[0][2], "failed: a, b");
-        let out = write_merged(&m, &d.join("out")).unwrap();
-        assert_eq!(SweepTable::read(&out).unwrap(), m);
+        let out = write_merged(&merged, &d.join("out")).unwrap();
+        assert_eq!(&SweepTable::read(&out).unwrap(), m);
 
         let other = write(d, "c.csv", "index,j,status\n3,z,ok\n");
         let e = merge(&[a.clone(), other]).unwrap_err().to_string();
@@ -364,7 +430,9 @@ mod tests {
         let d = dir.path();
         let one = write(d, "sweep.1-of-3.csv", "index,k,status\n0,a,ok\n3,b,ok\n");
         let three = write(d, "sweep.3-of-3.csv", "index,k,status\n2,c,ok\n5,d,o");
-        let (m, missing) = merge(&[one.clone(), three.clone()]).unwrap();
+        let Merged {
+            table: m, missing, ..
+        } = merge(&[one.clone(), three.clone()]).unwrap();
         assert_eq!(m.rows.len(), 3);
         assert_eq!(missing.shards, Some((3, vec![2])));
         assert_eq!(missing.combinations, [1]);
@@ -391,7 +459,7 @@ mod tests {
             "sweep.2-of-2.csv",
             &format!("{head}1,1,y,9,ok\n3,2,x,9,ok\n"),
         );
-        let (_, missing) = merge(&[one, two]).unwrap();
+        let missing = merge(&[one, two]).unwrap().missing;
         assert_eq!(missing.combinations, [4, 5]);
         // A value spelt two ways is one value: nothing missing.
         let one = write(
@@ -400,12 +468,51 @@ mod tests {
             &format!("{head}0,1,x,9,ok\n2,1.0,z,9,ok\n"),
         );
         let two = write(d, "sweep.2-of-2.csv", &format!("{head}1,1,y,9,ok\n"));
-        let (_, missing) = merge(&[one, two]).unwrap();
+        let missing = merge(&[one, two]).unwrap().missing;
         assert!(missing.is_empty(), "{missing}");
         let one = write(d, "sweep.1-of-3.csv", "index,k,status\n0,a,ok\n3,b,ok\n");
         // An index that is not its file's shard's.
         let wrong = write(d, "sweep.2-of-3.csv", "index,k,status\n2,e,ok\n");
         let e = merge(&[one, wrong]).unwrap_err().to_string();
         assert!(e.contains("combination 2 is not in shard 2 of 3"), "{e}");
+    }
+
+    #[test]
+    fn the_grid_beside_the_files_names_a_missing_block_and_refuses_another_grid() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let vary = |arg: &str| arg.parse::<super::super::Vary>().unwrap();
+        let v = [vary("a=1,2,3"), vary("b=x,y")];
+        let grid = |k, n| GridFile::new("text", "s", &v, Shard { k, n });
+        let put = |name: &str, g: &GridFile, rows: &str| {
+            let csv = write(d, name, &format!("index,a,b,links,status\n{rows}"));
+            let text = serde_json::to_string(g).unwrap();
+            std::fs::write(GridFile::beside(&csv), text).unwrap();
+            csv
+        };
+        // Shard 1 of 2 ran its first rows only; shard 2 holds every row of a = 1 and 2.
+        // The rows show a 2 x 2 grid, nothing missing; the grid file says 3 x 2.
+        let one = put("sweep.1-of-2.csv", &grid(1, 2), "0,1,x,9,ok\n2,2,x,9,ok\n");
+        let two = put("sweep.2-of-2.csv", &grid(2, 2), "1,1,y,9,ok\n3,2,y,9,ok\n");
+        let merged = merge(&[one.clone(), two.clone()]).unwrap();
+        assert_eq!(merged.missing.combinations, [4, 5]);
+        assert_eq!(merged.grid, Some(grid(1, 1)));
+        let out = write_merged(&merged, &d.join("out")).unwrap();
+        assert_eq!(read_grid(&GridFile::beside(&out)).unwrap(), grid(1, 1));
+        // Without the grid files the merge can only infer the grid from the rows.
+        std::fs::remove_file(GridFile::beside(&one)).unwrap();
+        std::fs::remove_file(GridFile::beside(&two)).unwrap();
+        assert!(merge(&[one.clone(), two]).unwrap().missing.is_empty());
+        // A file of another grid is not a shard of this sweep.
+        let one = put("sweep.1-of-2.csv", &grid(1, 2), "0,1,x,9,ok\n");
+        let other = GridFile::new("text", "s", &v[..1], Shard { k: 2, n: 2 });
+        let two = put("sweep.2-of-2.csv", &other, "1,1,y,9,ok\n");
+        let e = merge(&[one, two]).unwrap_err();
+        assert!(e.downcast_ref::<NotOneSweep>().is_some(), "{e}");
+        assert!(
+            e.to_string()
+                .contains("are of different grids (--vary a=1,2,3 b=x,y against a=1,2,3)"),
+            "{e}"
+        );
     }
 }
