@@ -322,13 +322,22 @@ fn a_killed_run_is_salvaged_into_a_prefix_of_the_run_it_was() {
     assert!(run(&full).wait().unwrap().success());
     let full_samples = std::fs::read(full.join("samples.csv")).unwrap();
     let full_log = messages_by_topic(&full.join("run.mcap"));
-    // Killed at three moments, when the samples first pass these sizes: early, midway, late.
+    // Killed at three random moments, early, midway and late: when the samples first pass
+    // a size drawn from each third of the file, the last 2 MB short of its end (the draw is
+    // printed, so that a failure can be repeated with it).
+    let seed = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .subsec_nanos();
+    let third = full_samples.len() as u64 / 3;
     let mut logs_kept = 0;
-    for (i, at) in [2_000_000_u64, 9_000_000, 17_000_000]
-        .into_iter()
-        .enumerate()
-    {
-        assert!(at < full_samples.len() as u64);
+    for i in 0..3_u64 {
+        // SplitMix64 of the seed and the moment's number.
+        let mut z = u64::from(seed).wrapping_add((i + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        let at = i * third + 500_000 + (z ^ (z >> 31)) % (third - 2_500_000);
+        println!("kill {i}: once the samples pass {at} bytes (seed {seed})");
         let out = dir.path().join(format!("killed-{i}"));
         let mut child = run(&out);
         let partial = out.join("samples.csv.partial");
