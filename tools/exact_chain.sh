@@ -5,7 +5,10 @@
 #   folded-table  onto a table, 8 pin heights 0.70-0.84 L, at 50 and 200 links, two steps
 #   coil NAME...  a shipped scene's 8 pushes on each bang engine (default: yoga-mat; the
 #                 thin tape's take about 15 minutes)
-# Usage: tools/exact_chain.sh [folded-free|folded-table|coil [SCENE ...]]   (default: all)
+#   thin-converge the thin tape's 8 pushes on the exact chain with pieces of b, 2 b and 5 b
+#                 at its 0.3 rad a step, and with pieces of 5 b at half the step
+# Usage: tools/exact_chain.sh [folded-free|folded-table|coil [SCENE ...]|thin-converge]
+#        (default: all but thin-converge)
 # Runs two at a time; the engine times are per run, so they share the machine's cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -100,11 +103,44 @@ PY
   done
 }
 
+# The thin tape's split against its piece length and its step, on the exact chain.
+thin_converge() {
+  pushes=0.100,0.101,0.102,0.103,0.104,0.105,0.106,0.107
+  "$bin" sweep scenes/thin-tape.toml --vary push.contact_speed_m_s=$pushes \
+    --vary solver.bang_piece_m=1e-4,2e-4,5e-4 --jobs 2 --quiet --out "$out/thin-pieces" \
+    > /dev/null || echo "(pieces: some runs did not complete; their rows say why)" >&2
+  "$bin" sweep scenes/thin-tape.toml --vary push.contact_speed_m_s=$pushes \
+    --vary solver.bang_step_rad=0.15 --jobs 2 --quiet --out "$out/thin-step" \
+    > /dev/null || echo "(step: some runs did not complete; their rows say why)" >&2
+  echo "### The thin tape on the exact chain: 8 pushes a setting (mean and standard error)"
+  echo
+  python3 - "$out/thin-pieces/sweep.csv" "$out/thin-step/sweep.csv" <<'PY'
+import csv, statistics as st, sys
+print("| piece | step | runs | floor normal | friction | freezing | numerical | bang wall / unroll wall |")
+print("|---|---|---|---|---|---|---|---|")
+def line(rs, piece, step):
+    ok = [r for r in rs if r["status"] == "ok"]
+    def ms(k):
+        xs = [100 * float(r[k]) for r in ok]
+        return f"{st.mean(xs):.2f} ± {st.stdev(xs) / len(xs) ** 0.5:.2f} %"
+    ratio = [(float(r["wall_s"]) - float(r["wall_rolling_s"])) / float(r["wall_rolling_s"]) for r in ok]
+    print(f"| {piece} | {step} | {len(ok)} of {len(rs)} | {ms('bang_floor_normal_of')} | "
+          f"{ms('bang_floor_friction_of')} | {ms('bang_freeze_of')} | {ms('bang_numerical_of')} | "
+          f"{st.median(ratio):.2f} (median) |")
+pieces = list(csv.DictReader(open(sys.argv[1])))
+for piece, label in (("1e-4", "b"), ("2e-4", "2 b"), ("5e-4", "5 b")):
+    line([r for r in pieces if r["solver.bang_piece_m"] == piece], label, "0.3 rad")
+line(list(csv.DictReader(open(sys.argv[2]))), "5 b", "0.15 rad")
+PY
+  echo
+}
+
 what=${1:-all}
 case $what in
   folded-free) folded_free ;;
   folded-table) folded_table ;;
   coil) shift; coil "${@:-yoga-mat}" ;;
+  thin-converge) thin_converge ;;
   all) folded_free; folded_table; coil yoga-mat ;;
-  *) echo "usage: $0 [folded-free|folded-table|coil [SCENE ...]]" >&2; exit 2 ;;
+  *) echo "usage: $0 [folded-free|folded-table|coil [SCENE ...]|thin-converge]" >&2; exit 2 ;;
 esac

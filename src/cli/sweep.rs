@@ -13,7 +13,8 @@ use uncoil::output::write_atomic;
 use uncoil::run::signals;
 use uncoil::study::analysis::{Reference, SweepAnalysis};
 use uncoil::study::sweep::{
-    Col, NotOneSweep, Shard, Sweep, SweepOptions, SweepTable, Vary, merge, write_merged,
+    Col, NotOneSweep, Shard, Sweep, SweepOptions, SweepOutcome, SweepTable, Vary, merge,
+    write_merged,
 };
 
 /// Arguments of `uncoil sweep`.
@@ -172,9 +173,10 @@ fn merge_command(files: &[PathBuf], dir: &Path, allow_partial: bool) -> ExitCode
 }
 
 /// `uncoil sweep`: 0 every run ended, 1 a run failed or a file could not be written,
-/// 2 bad input (a combination's scene is invalid; files that are not of one sweep, to merge or resume), 3 a guard stopped a run (and none
-/// failed), 130, 143 or 129 a signal stopped it (SIGINT, SIGTERM, SIGHUP: the runs in
-/// progress are rows marked `interrupted`, which `--resume` runs again).
+/// 2 bad input (a combination's scene is invalid; files that are not of one sweep, to merge
+/// or resume), 3 a guard stopped a run (and none failed), 130, 143 or 129 a signal stopped
+/// it (SIGINT, SIGTERM, SIGHUP: the runs in progress are rows marked `interrupted`, which
+/// `--resume` runs again).
 pub fn sweep(args: SweepArgs) -> ExitCode {
     if !args.merge.is_empty() {
         let dir = args.out.unwrap_or_else(|| folder_of(&args.merge[0]));
@@ -239,7 +241,12 @@ pub fn sweep(args: SweepArgs) -> ExitCode {
         },
         dir.display()
     );
-    match sweep.run(&dir, &opts) {
+    ended(sweep.run(&dir, &opts))
+}
+
+/// What a sweep's end prints, and its exit (see [`sweep`]).
+fn ended(outcome: anyhow::Result<SweepOutcome>) -> ExitCode {
+    match outcome {
         Ok(o) => {
             let kept = if o.kept > 0 {
                 format!(", {} kept from before", o.kept)

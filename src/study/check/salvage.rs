@@ -27,6 +27,8 @@ use crate::output::folder::{self, FileStamp};
 use crate::output::{CSV_COLUMNS, partial_path, write_atomic};
 use crate::scene::folded;
 
+use super::crashed::Cut;
+
 /// The `kind` of a salvaged run's `report.json`.
 pub const KIND: &str = "salvaged";
 
@@ -88,68 +90,15 @@ pub struct Salvaged {
 
 /// Salvages the killed run in `dir` (see the module's documentation).
 pub fn salvage(dir: &Path) -> Result<Salvaged, SalvageError> {
-    let shown = dir.display();
-    if dir.join(folder::REPORT).exists() {
-        return Err(SalvageError::NotKilled(format!(
-            "{shown} has a {}: its run ended, and there is nothing to salvage",
-            folder::REPORT
-        )));
-    }
-    let lock = folder::lock_holder(dir);
-    if lock.as_ref().is_some_and(|(_, held)| *held) {
-        return Err(SalvageError::NotKilled(format!(
-            "{shown}: a run still writes it ({}); salvage it once that process is gone",
-            lock.map(|(h, _)| h).unwrap_or_default()
-        )));
-    }
+    let holder = killed_run(dir)?;
     let samples = partial_path(&dir.join(folder::SAMPLES));
-    if !samples.exists() {
-        return Err(SalvageError::NotKilled(format!(
-            "{shown} holds no {}.partial: not a killed run's folder",
-            folder::SAMPLES
-        )));
-    }
-    let cut = super::crashed::complete_rows(&samples)?;
-    if cut.rows == 0 {
-        return Err(SalvageError::Nothing(format!(
-            "{}: no complete row: the run was killed before its first sample, and there is \
-             nothing to salvage",
-            samples.display()
-        )));
-    }
-    let samples_of = if cut.header.iter().eq(CSV_COLUMNS.iter()) {
-        "coil"
-    } else if cut.header == super::chain_columns() {
-        folded::KIND
-    } else {
-        return Err(SalvageError::Nothing(format!(
-            "{}: its header is neither a coil's nor a folded chain's columns",
-            samples.display()
-        )));
-    };
-
+    let (cut, samples_of) = complete_samples(&samples)?;
+    let log = partial_path(&dir.join(folder::LOG));
+    let read_log = log.exists().then(|| read_log(&log));
+    let (run_id, scene_name, scene_text) = identify(dir, &holder, read_log.as_ref())?;
     let mut lost = vec![
         "the ledger, the final bang and the references: a run books them at its end".to_owned(),
     ];
-    let log = partial_path(&dir.join(folder::LOG));
-    let read_log = log.exists().then(|| read_log(&log));
-    let (scene_name, scene_text) = match &read_log {
-        Some(Ok(l)) => (l.scene.get("name").cloned(), l.scene.get("text").cloned()),
-        _ => (None, None),
-    };
-    let holder = lock.map(|(h, _)| h).unwrap_or_default();
-    let (lock_id, lock_scene) = parse_holder(&holder);
-    let scene_name = scene_name.or(lock_scene).unwrap_or_default();
-    let run_id = match (lock_id, &scene_text) {
-        (Some(id), _) => id,
-        (None, Some(text)) => folder::run_id(&scene_name, text),
-        (None, None) => {
-            return Err(SalvageError::Nothing(format!(
-                "{shown}: neither its lock file nor its log names the run"
-            )));
-        }
-    };
-
     // The log first: the samples' rename is what marks the folder salvaged.
     let mut written = Vec::new();
     let log_messages = match read_log {
@@ -170,25 +119,13 @@ pub fn salvage(dir: &Path) -> Result<Salvaged, SalvageError> {
             Some(messages)
         }
         Some(Err(e)) => {
-            lost.push(format!(
-                "{}: left as it is, it does not read: {e:#}",
-                log.display()
-            ));
+            let shown = log.display();
+            lost.push(format!("{shown}: left as it is, it does not read: {e:#}"));
             None
         }
         None => None,
     };
-    let file = fs::OpenOptions::new()
-        .write(true)
-        .open(&samples)
-        .with_context(|| format!("cannot open {}", samples.display()))?;
-    file.set_len(cut.end_byte)
-        .and_then(|()| file.sync_all())
-        .with_context(|| format!("cannot cut {}", samples.display()))?;
-    drop(file);
-    let final_samples = dir.join(folder::SAMPLES);
-    fs::rename(&samples, &final_samples)
-        .with_context(|| format!("cannot rename {}", samples.display()))?;
+    let final_samples = keep_samples(&samples, &cut, dir)?;
     let report = SalvageReport {
         kind: KIND.to_owned(),
         run_id,
@@ -208,6 +145,96 @@ pub fn salvage(dir: &Path) -> Result<Salvaged, SalvageError> {
     written.insert(0, final_samples);
     written.push(path);
     Ok(Salvaged { report, written })
+}
+
+/// Whether `dir` is a killed run's folder: no report, no process holding its lock, a
+/// `samples.csv.partial`. Returns what its lock file says (empty if it has none).
+fn killed_run(dir: &Path) -> Result<String, SalvageError> {
+    let shown = dir.display();
+    if dir.join(folder::REPORT).exists() {
+        return Err(SalvageError::NotKilled(format!(
+            "{shown} has a {}: its run ended, and there is nothing to salvage",
+            folder::REPORT
+        )));
+    }
+    let lock = folder::lock_holder(dir);
+    if let Some((holder, true)) = &lock {
+        return Err(SalvageError::NotKilled(format!(
+            "{shown}: a run still writes it ({holder}); salvage it once that process is gone"
+        )));
+    }
+    if !partial_path(&dir.join(folder::SAMPLES)).exists() {
+        return Err(SalvageError::NotKilled(format!(
+            "{shown} holds no {}.partial: not a killed run's folder",
+            folder::SAMPLES
+        )));
+    }
+    Ok(lock.map(|(h, _)| h).unwrap_or_default())
+}
+
+/// The complete rows of a killed run's `samples` and whose columns they have (`coil` or
+/// `folded-chain`); none, or foreign columns, is nothing to keep.
+fn complete_samples(samples: &Path) -> Result<(Cut, &'static str), SalvageError> {
+    let cut = super::crashed::complete_rows(samples)?;
+    if cut.rows == 0 {
+        return Err(SalvageError::Nothing(format!(
+            "{}: no complete row: the run was killed before its first sample, and there is \
+             nothing to salvage",
+            samples.display()
+        )));
+    }
+    let samples_of = if cut.header.iter().eq(CSV_COLUMNS.iter()) {
+        "coil"
+    } else if cut.header == super::chain_columns() {
+        folded::KIND
+    } else {
+        return Err(SalvageError::Nothing(format!(
+            "{}: its header is neither a coil's nor a folded chain's columns",
+            samples.display()
+        )));
+    };
+    Ok((cut, samples_of))
+}
+
+/// The run's id, its scene's name and text: the id from the lock file (the scene's text
+/// and its name from the log, else the name from the lock), else made from the log's scene.
+fn identify(
+    dir: &Path,
+    holder: &str,
+    log: Option<&anyhow::Result<ReadLog>>,
+) -> Result<(String, String, Option<String>), SalvageError> {
+    let (scene_name, scene_text) = match log {
+        Some(Ok(l)) => (l.scene.get("name").cloned(), l.scene.get("text").cloned()),
+        _ => (None, None),
+    };
+    let (lock_id, lock_scene) = parse_holder(holder);
+    let scene_name = scene_name.or(lock_scene).unwrap_or_default();
+    let run_id = match (lock_id, &scene_text) {
+        (Some(id), _) => id,
+        (None, Some(text)) => folder::run_id(&scene_name, text),
+        (None, None) => {
+            return Err(SalvageError::Nothing(format!(
+                "{}: neither its lock file nor its log names the run",
+                dir.display()
+            )));
+        }
+    };
+    Ok((run_id, scene_name, scene_text))
+}
+
+/// Cuts `samples` after its last complete row and renames it `dir/samples.csv`.
+fn keep_samples(samples: &Path, cut: &Cut, dir: &Path) -> anyhow::Result<PathBuf> {
+    let file = fs::OpenOptions::new()
+        .write(true)
+        .open(samples)
+        .with_context(|| format!("cannot open {}", samples.display()))?;
+    file.set_len(cut.end_byte)
+        .and_then(|()| file.sync_all())
+        .with_context(|| format!("cannot cut {}", samples.display()))?;
+    drop(file);
+    let kept = dir.join(folder::SAMPLES);
+    fs::rename(samples, &kept).with_context(|| format!("cannot rename {}", samples.display()))?;
+    Ok(kept)
 }
 
 /// One line on a salvaged run's folder (`None` for any other): how far its files go.

@@ -236,22 +236,7 @@ pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<Merged> {
         if cut {
             missing.cut.push((path.clone(), t.rows.len()));
         }
-        let grid_path = GridFile::beside(path);
-        if grid_path.exists() {
-            let g = read_grid(&grid_path)?;
-            match &grid {
-                Some((first, from)) if !first.same_grid(&g) => {
-                    return Err(not_one(format!(
-                        "{} and {} are of different grids ({}): not shards of one sweep",
-                        from.display(),
-                        path.display(),
-                        first.difference(&g)
-                    )));
-                }
-                Some(_) => {}
-                None => grid = Some((g, path.clone())),
-            }
-        }
+        agree_grid(path, &mut grid)?;
         let ic = t
             .column(INDEX_COLUMN)
             .with_context(|| format!("{}: no `{INDEX_COLUMN}` column", path.display()))?;
@@ -268,36 +253,12 @@ pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<Merged> {
         if let Some(s) = shard {
             shards.insert(s.k, s.n);
         }
+        let size = grid.as_ref().map(|(g, _)| g.combinations);
         for r in &t.rows {
             let i: usize = r[ic].parse().with_context(|| {
                 format!("{}: `{}` is not a combination index", path.display(), r[ic])
             })?;
-            if let Some(s) = shard
-                && !s.contains(i)
-            {
-                return Err(not_one(format!(
-                    "{}: combination {i} is not in shard {} of {}",
-                    path.display(),
-                    s.k,
-                    s.n
-                )));
-            }
-            if let Some((g, _)) = &grid
-                && i >= g.combinations
-            {
-                return Err(not_one(format!(
-                    "{}: combination {i} is not in its grid of {}",
-                    path.display(),
-                    g.combinations
-                )));
-            }
-            if let Some(first) = seen.insert(i, path.clone()) {
-                return Err(not_one(format!(
-                    "combination {i} is in both {} and {}",
-                    first.display(),
-                    path.display()
-                )));
-            }
+            place(i, path, shard, size, &mut seen)?;
         }
         match &mut merged {
             None => merged = Some(t),
@@ -333,6 +294,64 @@ pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<Merged> {
         missing,
         grid: grid.map(|(g, _)| GridFile { shard: None, ..g }),
     })
+}
+
+/// Reads the grid stated beside the file `path`, if any, into `grid` (with the file that
+/// stated it first); a grid that differs from it is not one sweep's.
+fn agree_grid(path: &Path, grid: &mut Option<(GridFile, PathBuf)>) -> anyhow::Result<()> {
+    let grid_path = GridFile::beside(path);
+    if !grid_path.exists() {
+        return Ok(());
+    }
+    let g = read_grid(&grid_path)?;
+    match grid {
+        Some((first, from)) if !first.same_grid(&g) => Err(NotOneSweep(format!(
+            "{} and {} are of different grids ({}): not shards of one sweep",
+            from.display(),
+            path.display(),
+            first.difference(&g)
+        ))
+        .into()),
+        Some(_) => Ok(()),
+        None => {
+            *grid = Some((g, path.to_owned()));
+            Ok(())
+        }
+    }
+}
+
+/// Records combination `i`, read from `path` (of `shard`, in a grid of `size`), in `seen`:
+/// one outside its file's shard or grid, or already seen, is not one sweep's.
+fn place(
+    i: usize,
+    path: &Path,
+    shard: Option<Shard>,
+    size: Option<usize>,
+    seen: &mut BTreeMap<usize, PathBuf>,
+) -> Result<(), NotOneSweep> {
+    let shown = path.display();
+    if let Some(s) = shard
+        && !s.contains(i)
+    {
+        return Err(NotOneSweep(format!(
+            "{shown}: combination {i} is not in shard {} of {}",
+            s.k, s.n
+        )));
+    }
+    if let Some(n) = size
+        && i >= n
+    {
+        return Err(NotOneSweep(format!(
+            "{shown}: combination {i} is not in its grid of {n}"
+        )));
+    }
+    if let Some(first) = seen.insert(i, path.to_owned()) {
+        return Err(NotOneSweep(format!(
+            "combination {i} is in both {} and {shown}",
+            first.display()
+        )));
+    }
+    Ok(())
 }
 
 /// The size of the grid `t`'s rows come from: the product over the varied keys' columns
