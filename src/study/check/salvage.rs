@@ -123,7 +123,14 @@ pub fn salvage(dir: &Path) -> Result<Salvaged, SalvageError> {
             lost.push(format!("{shown}: left as it is, it does not read: {e:#}"));
             None
         }
-        None => None,
+        // A salvage cut short after its log was written: that log is the one kept.
+        None => crate::output::inspect::read_inventory(&dir.join(folder::LOG))
+            .ok()
+            .filter(|inv| {
+                inv.metadata.get("run").and_then(|m| m.get("stop_reason"))
+                    == Some(&STOP_REASON.to_owned())
+            })
+            .map(|inv| inv.channels.values().map(|c| c.messages).sum()),
     };
     let final_samples = keep_samples(&samples, &cut, dir)?;
     let report = SalvageReport {
@@ -392,7 +399,11 @@ mod tests {
         let header = CSV_COLUMNS.join(",");
         let (a, b) = (row("0.1"), row("0.2"));
         killed(dir.path(), &format!("{header}\n{a}\n{b}\n0.3,1.5,1."));
+        // An earlier log that is not a salvage's is not counted as this one's.
+        fs::write(dir.path().join(folder::LOG), "not a log").unwrap();
         let s = salvage(dir.path()).unwrap();
+        assert_eq!(s.report.log_messages, None);
+        fs::remove_file(dir.path().join(folder::LOG)).unwrap();
         assert_eq!((s.report.rows, s.report.t_s), (2, 0.2));
         assert_eq!(s.report.run_id, "00cafe");
         assert_eq!(s.report.samples_of, "coil");
