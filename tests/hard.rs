@@ -190,6 +190,38 @@ fn a_slippery_floor_run_writes_the_same_bytes_when_repeated() {
     assert_eq!(reports[0], reports[1], "two runs wrote different reports");
 }
 
+/// Starts `uncoil run SCENE --out OUT EXTRA...`, its output discarded.
+fn spawn_run(scene: &Path, out: &Path, extra: &[&str]) -> std::process::Child {
+    std::process::Command::new(assert_cmd::cargo::cargo_bin("uncoil"))
+        .arg("run")
+        .arg(scene)
+        .args(extra)
+        .arg("--out")
+        .arg(out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap()
+}
+
+/// Waits until the run `child` has written `bytes` of `out/samples.csv.partial`, and
+/// fails if it ends first or writes nothing for two minutes.
+fn wait_for_samples(child: &mut std::process::Child, out: &Path, bytes: u64) {
+    let partial = out.join("samples.csv.partial");
+    let start = Instant::now();
+    while std::fs::metadata(&partial).map_or(0, |m| m.len()) < bytes {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before it could be stopped"
+        );
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no rows written"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
 #[test]
 fn a_killed_run_leaves_only_partial_files() {
     let dir = tempfile::tempdir().unwrap();
@@ -199,29 +231,10 @@ fn a_killed_run_leaves_only_partial_files() {
     std::fs::write(out.join("samples.csv"), "an earlier run\n").unwrap();
     std::fs::write(out.join("report.json"), "{}\n").unwrap();
     std::fs::write(out.join("run.mcap"), "an earlier log\n").unwrap();
-    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("uncoil"))
-        .arg("run")
-        .arg(hard_path("thin-300"))
-        .arg("--out")
-        .arg(&out)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let partial = out.join("samples.csv.partial");
-    let start = Instant::now();
+    let mut child = spawn_run(&hard_path("thin-300"), &out, &[]);
     // Wait until a few rows are on disk (the thin tape runs for tens of seconds).
-    while std::fs::metadata(&partial).map_or(0, |m| m.len()) < 20_000 {
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "the run ended before it could be killed"
-        );
-        assert!(
-            start.elapsed() < Duration::from_secs(120),
-            "no rows written"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    wait_for_samples(&mut child, &out, 20_000);
+    let partial = out.join("samples.csv.partial");
     child.kill().unwrap();
     child.wait().unwrap();
     assert!(!out.join("samples.csv").exists(), "samples.csv exists");
@@ -254,22 +267,9 @@ fn a_killed_run_leaves_only_partial_files() {
 fn a_second_signal_ends_the_run_at_once_and_leaves_its_partial_files() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("uncoil"))
-        .arg("run")
-        .arg(hard_path("thin-300"))
-        .arg("--out")
-        .arg(&out)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
+    let mut child = spawn_run(&hard_path("thin-300"), &out, &[]);
+    wait_for_samples(&mut child, &out, 20_000);
     let partial = out.join("samples.csv.partial");
-    let start = Instant::now();
-    while std::fs::metadata(&partial).map_or(0, |m| m.len()) < 20_000 {
-        assert!(child.try_wait().unwrap().is_none(), "the run ended first");
-        assert!(start.elapsed() < Duration::from_secs(120), "no rows");
-        std::thread::sleep(Duration::from_millis(20));
-    }
     // Two different signals, sent back to back, are both delivered (two of the same may
     // merge into one): the first raises the stop flag, the second, finding it up, ends the
     // process before it finishes its files, as a user's second Ctrl-C means.
@@ -307,17 +307,7 @@ fn a_killed_run_is_salvaged_into_a_prefix_of_the_run_it_was() {
     let dir = tempfile::tempdir().unwrap();
     let thin = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/thin-tape.toml");
     // The thin tape to 25 s simulated: a few seconds, and logs of several chunks.
-    let run = |out: &Path| {
-        std::process::Command::new(assert_cmd::cargo::cargo_bin("uncoil"))
-            .arg("run")
-            .arg(&thin)
-            .args(["--set", "stop.max_time_s=25", "--out"])
-            .arg(out)
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap()
-    };
+    let run = |out: &Path| spawn_run(&thin, out, &["--set", "stop.max_time_s=25"]);
     let full = dir.path().join("full");
     assert!(run(&full).wait().unwrap().success());
     let full_samples = std::fs::read(full.join("samples.csv")).unwrap();
@@ -340,16 +330,7 @@ fn a_killed_run_is_salvaged_into_a_prefix_of_the_run_it_was() {
         println!("kill {i}: once the samples pass {at} bytes (seed {seed})");
         let out = dir.path().join(format!("killed-{i}"));
         let mut child = run(&out);
-        let partial = out.join("samples.csv.partial");
-        let start = Instant::now();
-        while std::fs::metadata(&partial).map_or(0, |m| m.len()) < at {
-            assert!(
-                child.try_wait().unwrap().is_none(),
-                "the run ended before it could be killed"
-            );
-            assert!(start.elapsed() < Duration::from_secs(120), "no rows");
-            std::thread::sleep(Duration::from_millis(5));
-        }
+        wait_for_samples(&mut child, &out, at);
         child.kill().unwrap();
         child.wait().unwrap();
         let assert = Command::cargo_bin("uncoil")
