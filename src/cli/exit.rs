@@ -14,8 +14,9 @@ pub enum Exit {
     /// 1: a failure while running: a file that could not be read or written, a run that
     /// failed, a merge with something missing, a check that found a problem.
     Failed,
-    /// 2: bad input: a scene, an argument, or an output folder another run holds; nothing
-    /// is written.
+    /// 2: bad input: a scene, an argument, an output folder another run holds, files that
+    /// are not of one sweep (to merge or resume), a folder that is not a killed run's (to
+    /// salvage); nothing is written.
     BadInput,
     /// 3: a guard stopped a run (its outputs hold everything up to the stop).
     Stopped,
