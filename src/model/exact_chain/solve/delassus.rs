@@ -240,12 +240,15 @@ fn gauss_seidel(
     let mut u: Vec<f64> = (0..m)
         .map(|r| u0[r] + (0..m).map(|c| w[r * m + c] * p[c]).sum::<f64>())
         .collect();
+    // `w` by columns: an impulse's change moves every contact's velocity by its column,
+    // read here in one run of memory (the same numbers as `w[r * m + j]`, in the same order).
+    let columns: Vec<f64> = (0..m * m).map(|i| w[(i % m) * m + i / m]).collect();
     let update = |j: usize, new: f64, p: &mut [f64], u: &mut [f64]| {
         let delta = new - p[j];
         if delta != 0.0 {
             p[j] = new;
-            for r in 0..m {
-                u[r] += w[r * m + j] * delta;
+            for (ur, wr) in u.iter_mut().zip(&columns[j * m..(j + 1) * m]) {
+                *ur += wr * delta;
             }
         }
         (delta * w[j * m + j]).abs()
