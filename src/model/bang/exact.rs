@@ -31,9 +31,12 @@ pub(in crate::model) struct ExactBang {
     pub(in crate::model) caught_j: f64,
     /// Each body's nodes in its own axes, from its centre of mass (m).
     nodes: Vec<Vec<[f64; 2]>>,
-    /// The farthest any node of each body moved over the last step, over the step's length
-    /// (m/s): the motion the step realised, which freezing reads (see [`Model::moved_speed`]).
-    moved_m_s: Vec<f64>,
+    /// The bodies before the last step that was solved, and that step's length (s): with
+    /// the bodies now, the motion the step realised, which freezing reads (see
+    /// [`Model::moved_speed`]). Empty until a step is solved.
+    before: (Vec<Body>, f64),
+    /// The bodies before the step being taken (a buffer reused from step to step).
+    pending: Vec<Body>,
 }
 
 impl Model {
@@ -49,9 +52,12 @@ impl Model {
         let Some(exact) = self.exact.as_mut() else {
             return Vec::new();
         };
-        let before: Vec<Body> = exact.chain.bodies().to_vec();
+        exact.pending.clear();
+        exact.pending.extend_from_slice(exact.chain.bodies());
         match exact.chain.step(dt, [gravity.x, gravity.y]) {
             Ok(report) => {
+                std::mem::swap(&mut exact.before.0, &mut exact.pending);
+                exact.before.1 = dt;
                 exact.stats.add(&report);
                 exact.penetration_m = report.penetration_m;
                 exact.gravity_work_j = report.gravity_work_j;
@@ -76,18 +82,6 @@ impl Model {
             body.set_linvel(Vector::new(b.velocity_m_s[0], b.velocity_m_s[1]), false);
             body.set_angvel(b.spin_rad_s, false);
         }
-        exact.moved_m_s = (exact.chain.bodies().iter().zip(&before))
-            .zip(&exact.nodes)
-            .map(|((now, was), nodes)| {
-                nodes
-                    .iter()
-                    .map(|&n| {
-                        let (a, b) = (now.point(n), was.point(n));
-                        (a[0] - b[0]).hypot(a[1] - b[1]) / dt
-                    })
-                    .fold(0.0, f64::max)
-            })
-            .collect();
         self.bang.solve = exact.stats;
         exact
             .chain
@@ -121,7 +115,13 @@ impl Model {
             .filter(|_| self.on_exact_chain())
             .and_then(|ex| {
                 let i = ex.bodies.iter().position(|&h| h == piece.body)?;
-                ex.moved_m_s.get(i).copied()
+                let (before, dt) = &ex.before;
+                let (now, was) = (ex.chain.bodies().get(i)?, before.get(i)?);
+                let moved = ex.nodes[i].iter().map(|&n| {
+                    let (a, b) = (now.point(n), was.point(n));
+                    (a[0] - b[0]).hypot(a[1] - b[1]) / dt
+                });
+                Some(moved.fold(0.0, f64::max))
             });
         if let Some(speed) = realised {
             return speed;
@@ -248,7 +248,8 @@ impl Model {
             .collect();
         ExactBang {
             nodes,
-            moved_m_s: Vec::new(),
+            before: (Vec::new(), 0.0),
+            pending: Vec::new(),
             chain,
             bodies: handles,
             pin,
