@@ -148,7 +148,10 @@ pub fn verify_outputs(dir: &Path) -> Vec<String> {
         .and_then(|text| serde_json::from_str::<serde_json::Value>(text).ok())
         .map(|v| ReportKind::of(&v))
         .unwrap_or(ReportKind::Coil);
-    let columns: Vec<String> = if matches!(kind, ReportKind::Chain | ReportKind::Salvaged(true)) {
+    let columns: Vec<String> = if matches!(
+        kind,
+        ReportKind::Chain | ReportKind::Salvaged { chain: true }
+    ) {
         chain_columns()
     } else {
         CSV_COLUMNS.iter().map(|c| (*c).to_owned()).collect()
@@ -161,7 +164,7 @@ pub fn verify_outputs(dir: &Path) -> Vec<String> {
         Ok(text) => problems.extend(match kind {
             ReportKind::Coil => report_problem(&text),
             ReportKind::Chain => chain_report_problem(&text),
-            ReportKind::Salvaged(_) => salvage_report_problem(&text),
+            ReportKind::Salvaged { .. } => salvage_report_problem(&text),
         }),
         Err(e) => problems.push(format!("{}: {e}", folder::REPORT)),
     }
@@ -176,18 +179,21 @@ enum ReportKind {
     Coil,
     /// A folded chain's run.
     Chain,
-    /// A killed run's, salvaged ([`salvage`]): its samples are a coil's
-    /// or a folded chain's, as `samples_of` says.
-    Salvaged(bool),
+    /// A killed run's, salvaged ([`salvage`]): its samples a folded chain's or not, as
+    /// `samples_of` says.
+    Salvaged {
+        /// Whether the samples are a folded chain's.
+        chain: bool,
+    },
 }
 
 impl ReportKind {
     fn of(report: &serde_json::Value) -> Self {
         match report.get("kind").and_then(|k| k.as_str()) {
             Some(folded::KIND) => Self::Chain,
-            Some(salvage::KIND) => Self::Salvaged(
-                report.get("samples_of").and_then(|k| k.as_str()) == Some(folded::KIND),
-            ),
+            Some(salvage::KIND) => Self::Salvaged {
+                chain: report.get("samples_of").and_then(|k| k.as_str()) == Some(folded::KIND),
+            },
             _ => Self::Coil,
         }
     }

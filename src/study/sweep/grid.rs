@@ -196,7 +196,7 @@ impl GridFile {
                     )
                 })
                 .collect(),
-            combinations: grid(varies).len(),
+            combinations: varies.iter().map(|v| v.values.len()).product(),
             shard: (shard != Shard::ALL).then_some([shard.k, shard.n]),
         }
     }
