@@ -130,10 +130,7 @@ impl Sweep {
             .map(|(l, _)| l.to_string())
             .collect();
         let header = header(&self.keys, &labels);
-        let grid = GridFile {
-            shard: (opts.shard != Shard::ALL).then_some([opts.shard.k, opts.shard.n]),
-            ..self.grid.clone()
-        };
+        let grid = self.grid.clone().for_shard(opts.shard);
         let grid_path = GridFile::beside(&path);
         if opts.resume && grid_path.exists() {
             let theirs = read_grid(&grid_path)?;

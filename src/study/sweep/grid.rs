@@ -197,7 +197,16 @@ impl GridFile {
                 })
                 .collect(),
             combinations: varies.iter().map(|v| v.values.len()).product(),
+            shard: None,
+        }
+        .for_shard(shard)
+    }
+
+    /// The same grid, for `shard`'s file.
+    pub fn for_shard(self, shard: Shard) -> Self {
+        Self {
             shard: (shard != Shard::ALL).then_some([shard.k, shard.n]),
+            ..self
         }
     }
 

@@ -292,7 +292,7 @@ pub fn merge(inputs: &[PathBuf]) -> anyhow::Result<Merged> {
     Ok(Merged {
         table: m,
         missing,
-        grid: grid.map(|(g, _)| GridFile { shard: None, ..g }),
+        grid: grid.map(|(g, _)| g.for_shard(Shard::ALL)),
     })
 }
 
