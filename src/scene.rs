@@ -270,7 +270,7 @@ pub enum AnyScene {
 
 /// The text of the scene file at `path` and its stem, the scene's default name; when no
 /// such file exists and `path` is a shipped scene's name (`yoga-mat`), that scene's.
-pub(crate) fn read_scene_file(path: &Path) -> Result<(String, String), SceneError> {
+pub fn read_scene_file(path: &Path) -> Result<(String, String), SceneError> {
     let stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -300,10 +300,8 @@ impl Scene {
     /// Parses and validates scene TOML `text`; `name` is used when the text has no
     /// top-level `name` key.
     pub fn from_toml_str(text: &str, name: &str) -> Result<Scene, SceneError> {
-        let file: file::SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
-            name: name.to_owned(),
-            message: e.to_string(),
-        })?;
+        let file: file::SceneFile =
+            toml::from_str(text).map_err(|e| rules::parse_error(name, &e))?;
         Self::validate(file, name, text)
     }
 }

@@ -322,10 +322,8 @@ impl FoldedChain {
     /// Parses and validates a folded chain's TOML `text`; `name` is used when the text has
     /// no top-level `name`.
     pub fn from_toml_str(text: &str, name: &str) -> Result<Self, SceneError> {
-        let file: FoldedFile = toml::from_str(text).map_err(|e| SceneError::Parse {
-            name: name.to_owned(),
-            message: e.to_string(),
-        })?;
+        let file: FoldedFile =
+            toml::from_str(text).map_err(|e| crate::scene::rules::parse_error(name, &e))?;
         Self::validate(file, name, text)
     }
 

@@ -131,8 +131,10 @@ pub fn scene_with_overrides(
     if overrides.is_empty() {
         return Scene::from_toml_str(text, name);
     }
-    let edited = edited(text, name, overrides)?;
-    let mut scene = Scene::from_toml_str(&edited, name).map_err(|e| after(e, overrides))?;
+    let parse = |t: &str| Scene::from_toml_str(t, name);
+    let set = edited(text, name, overrides)?;
+    let mut scene =
+        parse(&set).map_err(|e| after(e, overrides, |o| alone_error(text, name, o, parse)))?;
     scene.source_text = noted(text, overrides);
     Ok(scene)
 }
@@ -160,9 +162,10 @@ pub fn any_scene_file_with_overrides(
     match kind {
         None => scene_with_overrides(&text, &stem, overrides).map(|s| AnyScene::Coil(Box::new(s))),
         Some(toml::Value::String(k)) if k == folded::KIND => {
-            let edited = edited(&text, &stem, overrides)?;
-            let mut chain =
-                FoldedChain::from_toml_str(&edited, &stem).map_err(|e| after(e, overrides))?;
+            let parse = |t: &str| FoldedChain::from_toml_str(t, &stem);
+            let set = edited(&text, &stem, overrides)?;
+            let mut chain = parse(&set)
+                .map_err(|e| after(e, overrides, |o| alone_error(&text, &stem, o, parse)))?;
             chain.source_text = noted(&text, overrides);
             Ok(AnyScene::FoldedChain(chain))
         }
@@ -192,28 +195,56 @@ fn edited(text: &str, name: &str, overrides: &[Override]) -> Result<String, Scen
     })
 }
 
-/// A parse error of the edited text, naming the overrides it came after. The parser's
-/// location (a line of the scene as rewritten with the overrides, a text the user never
-/// wrote) is dropped; its message is kept.
-fn after(e: SceneError, overrides: &[Override]) -> SceneError {
+/// A parse error of the edited text, naming the override that causes it (the one whose own
+/// error, `alone`, is the same), or else the overrides it came after. The parser's location
+/// (a line of the scene as rewritten with the overrides, a text the user never wrote) is
+/// dropped; its message is kept.
+fn after(
+    e: SceneError,
+    overrides: &[Override],
+    alone: impl Fn(&Override) -> Option<String>,
+) -> SceneError {
     match e {
         SceneError::Parse { name, message } if !overrides.is_empty() => {
-            let core: Vec<&str> = message
-                .lines()
-                .skip_while(|l| !l.contains('^'))
-                .skip(1)
-                .collect();
-            let core = if core.is_empty() {
-                message.trim_end().to_owned()
-            } else {
-                core.join("\n")
+            let core = core(&message);
+            let message = match overrides
+                .iter()
+                .find(|o| alone(o).is_some_and(|own| own == core))
+            {
+                Some(o) => format!("{o}: {core}"),
+                None => format!("{core} (after the overrides {})", list(overrides)),
             };
-            SceneError::Parse {
-                name,
-                message: format!("{core} (after the overrides {})", list(overrides)),
-            }
+            SceneError::Parse { name, message }
         }
         other => other,
+    }
+}
+
+/// A parser's message without its location: the lines after the one that points (`^`).
+fn core(message: &str) -> String {
+    let lines: Vec<&str> = message
+        .lines()
+        .skip_while(|l| !l.contains('^'))
+        .skip(1)
+        .collect();
+    if lines.is_empty() {
+        message.trim_end().to_owned()
+    } else {
+        lines.join("\n")
+    }
+}
+
+/// The schema error (not a rule's) of `text` with the one override `o`, as `parse` reads
+/// it, without its location; `None` if it parses.
+fn alone_error<T>(
+    text: &str,
+    name: &str,
+    o: &Override,
+    parse: impl Fn(&str) -> Result<T, SceneError>,
+) -> Option<String> {
+    match edited(text, name, std::slice::from_ref(o)).and_then(|t| parse(&t)) {
+        Err(SceneError::Parse { message, .. }) => Some(core(&message)),
+        _ => None,
     }
 }
 
@@ -323,7 +354,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("unknown field `max_dt`"), "{e}");
-        assert!(e.contains("after the overrides solver.max_dt=0.001"), "{e}");
+        assert!(e.contains(": solver.max_dt=0.001: "), "{e}");
         // No line of the rewritten text the user never wrote.
         assert!(!e.contains("parse error at line"), "{e}");
         let e = scene_with_overrides(YOGA, "y", &[ov("colour.hue=1")])
@@ -338,6 +369,35 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("unknown variant `glue`"), "{e}");
+    }
+
+    /// A type error names the override that made it, among others, with its types in
+    /// words.
+    #[test]
+    fn a_type_error_names_its_override_in_words() {
+        let overrides = [
+            ov("push.contact_speed_m_s=0.2"),
+            ov("tape.thickness_m=abc"),
+            ov("discretisation.links_per_turn=1.5"),
+        ];
+        let e = scene_with_overrides(YOGA, "y", &overrides[..2])
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "cannot parse scene y: tape.thickness_m=abc: invalid type: the text \"abc\", \
+             expected a number"
+        );
+        let e = scene_with_overrides(YOGA, "y", &overrides)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.ends_with(
+                ": discretisation.links_per_turn=1.5: invalid type: the number \
+                         `1.5`, expected a whole number"
+            ),
+            "{e}"
+        );
     }
 
     #[test]

@@ -16,6 +16,42 @@ pub(super) fn invalid(key: &str, value: impl Display, rule: impl Into<String>) -
     }
 }
 
+/// The schema error of scene `name` from the TOML parser, its types said in words
+/// ([`plain_types`]).
+pub(crate) fn parse_error(name: &str, error: &impl Display) -> SceneError {
+    SceneError::Parse {
+        name: name.to_owned(),
+        message: plain_types(&error.to_string()),
+    }
+}
+
+/// A parser's message with its Rust type names said in words: `expected f64` as `expected a
+/// number`, `expected i64` (or any integer type) as `expected a whole number`, and what was
+/// found (`string "abc"`, ``floating point `1.5` ``) as `the text "abc"`, `the number 1.5`.
+pub(crate) fn plain_types(message: &str) -> String {
+    const WORDS: &[(&str, &str)] = &[
+        ("expected f64", "expected a number"),
+        ("expected f32", "expected a number"),
+        ("expected i64", "expected a whole number"),
+        ("expected u64", "expected a whole number"),
+        ("expected u32", "expected a whole number"),
+        ("expected i32", "expected a whole number"),
+        ("expected usize", "expected a whole number"),
+        ("expected a boolean", "expected true or false"),
+        ("invalid type: string ", "invalid type: the text "),
+        ("invalid type: floating point ", "invalid type: the number "),
+        ("invalid type: integer ", "invalid type: the whole number "),
+        ("invalid type: boolean ", "invalid type: the boolean "),
+        ("invalid type: sequence", "invalid type: a list"),
+        ("invalid type: map", "invalid type: a table"),
+    ];
+    let mut plain = message.to_owned();
+    for (rust, words) in WORDS {
+        plain = plain.replace(rust, words);
+    }
+    plain
+}
+
 /// A float as written in messages: plainly, or in exponent form when huge or tiny (so that
 /// `1e300` does not print 301 digits).
 pub(super) struct Shown(pub(super) f64);
