@@ -1,36 +1,41 @@
 //! The `uncoil` command line: `uncoil run SCENE [--out DIR] [--set KEY=VALUE]... [--no-mcap]
 //! [--live [ADDR] [--pace X]]`,
 //! `uncoil inspect RUN.mcap`, `uncoil check`, `uncoil compare`, `uncoil sweep`,
-//! `uncoil sweep-report`, `uncoil plot`.
+//! `uncoil sweep-report`, `uncoil plot`, `uncoil scenes`.
 //!
-//! Results go to stdout, diagnostics to stderr. Exit codes: 0 success, 1 a failure during
-//! the run (e.g. an output file could not be written) or an unreadable MCAP file, 2 bad input
-//! (scene or usage), 3 a guard stopped the run (a blow-up: its reason is on stderr and in
+//! Results go to stdout, diagnostics to stderr. Exit codes (`cli/exit.rs`): 0 success, 1 a
+//! failure during the work (e.g. an output file could not be written), 2 bad input (a scene,
+//! an argument, a path missing or of the wrong kind), 3 a guard stopped the run (a blow-up: its reason is on stderr and in
 //! `report.json`, and the outputs hold everything logged up to the stop), 130, 143 or 129 a
 //! run stopped by SIGINT (Ctrl-C), SIGTERM or SIGHUP (its outputs are complete up to
 //! there, the signal named).
 
+use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
+use anyhow::Context as _;
 use clap::{Parser, Subcommand};
 
 use uncoil::output::compare::{SampleLog, table};
 use uncoil::output::files::{self, RunFiles};
 use uncoil::output::folded::{chain_summary, write_chain_run};
-use uncoil::output::folder::{FolderError, RunFolder, run_id};
+use uncoil::output::folder::{RunFolder, run_id};
 use uncoil::output::summary;
 use uncoil::output::view::ViewObserver;
 use uncoil::run::folded::ChainEnd;
 use uncoil::run::run;
 use uncoil::run::stop::{Status, StopReason};
-use uncoil::scene::AnyScene;
-use uncoil::scene::Scene;
 use uncoil::scene::folded::FoldedChain;
 use uncoil::scene::overrides::{Override, any_scene_file_with_overrides};
+use uncoil::scene::{AnyScene, Scene, shipped};
 use uncoil::study::check;
+
+/// What a scene argument takes, in every command's help.
+const SCENE_HELP: &str = "A scene file (TOML), e.g. scenes/yoga-mat.toml, or a shipped \
+                          scene's name, e.g. yoga-mat (`uncoil scenes` lists them)";
 
 #[derive(Parser)]
 #[command(
@@ -46,15 +51,16 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run a scene: simulate, compare with the references, write samples.csv, report.json and
-    /// run.mcap (the Foxglove log) into the output folder. A folded chain
-    /// (scenes/validation/) writes samples.csv and report.json.
+    /// run.mcap (the Foxglove log, with foxglove-layout.json beside it) into the output
+    /// folder. A folded chain (`folded-chain`) writes samples.csv and report.json.
     Run {
-        /// The scene file (TOML), e.g. scenes/yoga-mat.toml.
+        #[arg(help = SCENE_HELP)]
         scene: PathBuf,
         /// Output folder (default: runs/<scene name>).
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Override a scene value, e.g. `--set discretisation.links_per_turn=64` (repeatable).
+        /// Override a scene value, one word, e.g. `--set discretisation.links_per_turn=64`
+        /// (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<Override>,
         /// Do not write run.mcap.
@@ -83,12 +89,15 @@ enum Command {
         /// A run's output folder, e.g. runs/yoga-mat.
         dir: PathBuf,
     },
-    /// Run every scene of a folder (the hard cases), verify the outputs, print a table; or,
-    /// given a run's output folder (one with a report.json), verify that its files are sound
-    /// and belong to one run; or, given a killed run's folder, say what it left. Exit 0 when
-    /// every case ends with a stated reason and sound outputs, else 1.
+    /// Run the hard cases, verify the outputs, print a table (about 40 minutes on a 2-core
+    /// machine, most of it the 1000-turn tape); or, given a run's output folder (one with a
+    /// report.json), verify that its files are sound and belong to one run; or, given a
+    /// killed run's folder, say what it left. Exit 0 when every case ends with a stated
+    /// reason and sound outputs, else 1.
     Check {
-        /// Folder of scene files (default: scenes/hard), or a run's output folder.
+        /// A folder of scene files, one scene (a file, or a shipped name such as
+        /// hard/thin-300), `hard` (the hard cases, built in; the default, read from
+        /// scenes/hard/ where that folder exists), or a run's output folder.
         dir: Option<PathBuf>,
         /// Output folder, one subfolder per case (default: runs/check).
         #[arg(long)]
@@ -96,63 +105,47 @@ enum Command {
         /// Given a killed run's folder (`kill -9`, a crash): keep what it wrote. The samples
         /// are cut after their last complete row, the log is finished as far as it reads, and
         /// a report.json of kind "salvaged" says how far they go and what was lost.
-        #[arg(long)]
+        #[arg(long, requires = "dir")]
         salvage: bool,
     },
     /// Run scenes and print the paradox table: milestone times of the simulation and of
     /// every competing equation of motion for each scene, as markdown.
     Compare {
-        /// The scene files (TOML), e.g. scenes/*.toml.
+        /// Scene files (TOML), e.g. scenes/*.toml, or shipped scenes' names, e.g. yoga-mat.
         #[arg(required = true)]
         scenes: Vec<PathBuf>,
     },
+    /// List the shipped scenes, which every command takes by name: each one's name and kind.
+    Scenes,
 }
 
 mod cli {
-    //! The subcommands that are more than a call into the library, and the exit codes.
+    //! The subcommands that are more than a call into the library, the checks of the paths
+    //! they are given, and the exit codes.
     pub mod exit;
+    pub mod paths;
     pub mod sweep;
 }
 
-use cli::exit::Exit;
+use cli::exit::{Exit, Usage, fail};
+use cli::paths;
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
-    match cli.command {
+    let args: Vec<OsString> = std::env::args_os().collect();
+    if let Some(hint) = split_value(&args) {
+        eprintln!("error: {hint}");
+        return Exit::BadInput.into();
+    }
+    let cli = Cli::parse_from(args);
+    let done = match cli.command {
         Command::Check { dir, out, salvage } => match (salvage, dir) {
             (true, Some(dir)) => salvage_run(&dir),
-            (true, None) => {
-                eprintln!(
-                    "error: --salvage needs a killed run's folder: uncoil check DIR --salvage"
-                );
-                Exit::BadInput.into()
-            }
-            (false, dir) => check(dir, out),
+            (_, dir) => check(dir, out),
         },
         Command::Sweep(args) => cli::sweep::sweep(args),
         Command::SweepReport(args) => cli::sweep::report(&args),
-        Command::Plot { dir } => match uncoil::study::plot::plot_run(&dir) {
-            Ok(files) => {
-                for f in files {
-                    println!("wrote {}", f.display());
-                }
-                Exit::Ok.into()
-            }
-            Err(e) => {
-                eprintln!("error: {e:#}");
-                Exit::Failed.into()
-            }
-        },
-        Command::Inspect { file } => match uncoil::output::inspect::read_inventory(&file) {
-            Ok(inv) => {
-                print!("{}", uncoil::output::inspect::describe(&file, &inv));
-                Exit::Ok.into()
-            }
-            Err(e) => {
-                eprintln!("error: {e:#}");
-                Exit::Failed.into()
-            }
-        },
+        Command::Plot { dir } => plot(&dir),
+        Command::Inspect { file } => inspect(&file),
         Command::Run {
             scene,
             out,
@@ -166,80 +159,130 @@ fn main() -> ExitCode {
                 live,
                 pace,
             };
-            match any_scene_file_with_overrides(&scene, &set) {
-                Ok(AnyScene::Coil(scene)) => run_command(&scene, out, &view),
-                Ok(AnyScene::FoldedChain(chain)) => run_chain_command(&chain, out, &view),
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    Exit::BadInput.into()
-                }
-            }
+            run_any(&scene, &set, out, &view)
         }
         Command::Compare { scenes } => compare(&scenes),
+        Command::Scenes => {
+            list_scenes();
+            Ok(Exit::Ok)
+        }
+    };
+    match done {
+        Ok(exit) => exit.into(),
+        Err(e) => fail(e),
     }
 }
 
+/// A `--set` or `--vary` whose value came as a separate word (`--set tape.thickness_m
+/// 0.004`), said with the one word it should be; clap would only call the value an
+/// unexpected argument.
+fn split_value(args: &[OsString]) -> Option<String> {
+    args.windows(3).find_map(|w| {
+        let [flag, key, value] = w else { return None };
+        let flag = flag.to_str()?;
+        let (key, value) = (key.to_str()?, value.to_str()?);
+        let split = matches!(flag, "--set" | "--vary")
+            && !key.contains('=')
+            && !key.starts_with('-')
+            && !value.starts_with('-')
+            && shipped::text(value).is_none()
+            && !Path::new(value).exists();
+        split.then(|| {
+            format!(
+                "{flag} {key} {value}: {flag} takes KEY=VALUE as one word: {flag} {key}={value}"
+            )
+        })
+    })
+}
+
+/// `uncoil scenes`: each shipped scene's name and kind, then the hard cases'.
+fn list_scenes() {
+    for name in shipped::names().into_iter().chain(shipped::hard_names()) {
+        let text = shipped::text(name).unwrap_or_default();
+        println!("{name:<26} {}", shipped::kind(text));
+    }
+}
+
+/// `uncoil run` on a scene of either kind.
+fn run_any(
+    scene: &Path,
+    set: &[Override],
+    out: Option<PathBuf>,
+    view: &View,
+) -> anyhow::Result<Exit> {
+    let scene = any_scene_file_with_overrides(scene, set)?;
+    if let Some(out) = &out {
+        paths::out_folder(out)?;
+    }
+    match scene {
+        AnyScene::Coil(scene) => run_command(&scene, out, view),
+        AnyScene::FoldedChain(chain) => run_chain_command(&chain, out, view),
+    }
+}
+
+/// `uncoil plot DIR`.
+fn plot(dir: &Path) -> anyhow::Result<Exit> {
+    paths::run_folder(dir)?;
+    for f in uncoil::study::plot::plot_run(dir)? {
+        println!("wrote {}", f.display());
+    }
+    Ok(Exit::Ok)
+}
+
+/// `uncoil inspect FILE`.
+fn inspect(file: &Path) -> anyhow::Result<Exit> {
+    paths::mcap_file(file)?;
+    let inv = uncoil::output::inspect::read_inventory(file)?;
+    print!("{}", uncoil::output::inspect::describe(file, &inv));
+    Ok(Exit::Ok)
+}
+
 /// `uncoil run` on a coil's scene.
-fn run_command(scene: &Scene, out: Option<PathBuf>, view: &View) -> ExitCode {
+fn run_command(scene: &Scene, out: Option<PathBuf>, view: &View) -> anyhow::Result<Exit> {
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&scene.name));
     let shown = match (view.file, view.live) {
         (true, _) => files::View::File,
         (false, Some(_)) => files::View::Unwritten,
         (false, None) => files::View::Off,
     };
-    let mut files = match RunFiles::take(&dir, scene, shown) {
-        Ok(f) => f,
-        Err(e) => return folder_refused(e),
-    };
+    let mut files = RunFiles::take(&dir, scene, shown)?;
     let stop = stop_flag();
-    match run_scene(scene, &mut files, view, &stop) {
-        Ok((text, end)) => {
-            print!("{text}");
-            match end.status() {
-                Status::Completed => {}
-                Status::Interrupted => {
-                    eprintln!("{end}: the outputs end at the last step taken");
-                }
-                Status::Stopped => eprintln!("error: the run was stopped by a guard: {end}"),
-            }
-            Exit::of(end.status()).into()
+    let (text, end) = run_scene(scene, &mut files, view, &stop)?;
+    print!("{text}");
+    match end.status() {
+        Status::Completed => {}
+        Status::Interrupted => {
+            eprintln!("{end}: the outputs end at the last step taken");
         }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            Exit::Failed.into()
-        }
+        Status::Stopped => eprintln!("error: the run was stopped by a guard: {end}"),
     }
+    Ok(Exit::of(end.status()))
 }
 
 /// `uncoil run` on a folded chain: no Foxglove view, its summary on stdout.
-fn run_chain_command(chain: &FoldedChain, out: Option<PathBuf>, view: &View) -> ExitCode {
+fn run_chain_command(
+    chain: &FoldedChain,
+    out: Option<PathBuf>,
+    view: &View,
+) -> anyhow::Result<Exit> {
     if view.live.is_some() {
-        eprintln!("error: --live: a folded chain has no Foxglove view");
-        return Exit::BadInput.into();
+        anyhow::bail!(Usage(format!(
+            "--live: {} is a folded chain, which has no Foxglove view",
+            chain.name
+        )));
     }
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&chain.name));
-    let folder = match RunFolder::take(&dir, &run_id(&chain.name, &chain.source_text), &chain.name)
-    {
-        Ok(f) => f,
-        Err(e) => return folder_refused(e),
-    };
+    let folder = RunFolder::take(&dir, &run_id(&chain.name, &chain.source_text), &chain.name)?;
     let stop = stop_flag();
     eprintln!("running {} into {} ...", chain.name, dir.display());
-    match write_chain_run(chain, &folder, &stop) {
-        Ok(report) => {
-            print!("{}", chain_summary(chain, &report));
-            println!("Wrote {0}/samples.csv and {0}/report.json", dir.display());
-            match report.end {
-                ChainEnd::Interrupted => Exit::Interrupted.into(),
-                ChainEnd::NotFinite | ChainEnd::Unsolved => Exit::Stopped.into(),
-                _ => Exit::Ok.into(),
-            }
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            Exit::Failed.into()
-        }
-    }
+    let report = write_chain_run(chain, &folder, &mut |_| Ok(()), &stop)?;
+    print!("{}", chain_summary(chain, &report));
+    println!("Wrote {0}/samples.csv and {0}/report.json", dir.display());
+    Ok(match report.end {
+        ChainEnd::Interrupted => Exit::Interrupted,
+        ChainEnd::NotFinite | ChainEnd::Unsolved => Exit::Stopped,
+        _ => Exit::Ok,
+    })
 }
 
 /// The flag a stopping signal raises (SIGINT, SIGTERM, SIGHUP: `uncoil::run::signals`): the
@@ -251,43 +294,56 @@ pub(crate) fn stop_flag() -> Arc<AtomicBool> {
     })
 }
 
-fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> ExitCode {
-    let dir = dir.unwrap_or_else(|| PathBuf::from("scenes/hard"));
-    if dir.join(uncoil::output::folder::REPORT).exists() {
-        let problems = check::verify_outputs(&dir);
-        for p in &problems {
-            println!("{}: {p}", dir.display());
+/// Where the hard cases are read from: a folder of that name where it exists, else the
+/// ones built in.
+const HARD: &str = "scenes/hard";
+
+/// What `uncoil check` takes.
+const CHECK_TAKES: &str =
+    "a folder of scene files, a scene, `hard` (the hard cases), or a run's output folder";
+
+/// `uncoil check [DIR]`: a run's folder verified, a killed run's described, or a folder of
+/// scenes (the hard cases by default) run and verified.
+fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> anyhow::Result<Exit> {
+    let dir = dir.unwrap_or_else(|| PathBuf::from(HARD));
+    let built_in = !dir.exists() && (dir == Path::new(HARD) || dir == Path::new("hard"));
+    if let Some(out) = &out {
+        paths::out_folder(out)?;
+    }
+    let one_scene =
+        dir.is_file() || (!dir.exists() && dir.to_str().and_then(shipped::text).is_some());
+    let files = if built_in {
+        let names = shipped::hard_names();
+        eprintln!(
+            "checking the {} hard cases built in ({HARD}/ is not here) ...",
+            names.len()
+        );
+        names.into_iter().map(PathBuf::from).collect()
+    } else if one_scene {
+        coil_scene(&dir)?;
+        vec![dir]
+    } else {
+        paths::folder(&dir, CHECK_TAKES)?;
+        if dir.join(uncoil::output::folder::REPORT).exists() {
+            return Ok(verify_run(&dir));
         }
-        if problems.is_empty() {
-            println!(
-                "{}: the files are sound and belong to one run",
-                dir.display()
-            );
-            if let Some(line) = check::salvage::describe(&dir) {
+        if let Some(lines) = check::crashed_run(&dir) {
+            for line in lines {
                 println!("{}: {line}", dir.display());
             }
-            return Exit::Ok.into();
+            return Ok(Exit::Failed);
         }
-        return Exit::Failed.into();
-    }
-    if let Some(lines) = check::crashed_run(&dir) {
-        for line in lines {
-            println!("{}: {line}", dir.display());
+        let files = check::scene_files(&dir)?;
+        if files.is_empty() {
+            anyhow::bail!(paths::PathError {
+                path: dir,
+                found: "a folder with no scene files (*.toml), no run's files".into(),
+                expected: CHECK_TAKES.into(),
+            });
         }
-        return Exit::Failed.into();
-    }
-    let out = out.unwrap_or_else(|| PathBuf::from("runs/check"));
-    let files = match check::scene_files(&dir) {
-        Ok(f) if f.is_empty() => {
-            eprintln!("error: no scene files (*.toml) in {}", dir.display());
-            return Exit::BadInput.into();
-        }
-        Ok(f) => f,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            return Exit::BadInput.into();
-        }
+        files
     };
+    let out = out.unwrap_or_else(|| PathBuf::from("runs/check"));
     let mut cases = Vec::new();
     for file in &files {
         eprintln!("checking {} ...", file.display());
@@ -296,67 +352,77 @@ fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> ExitCode {
         cases.push(case);
     }
     print!("{}", check::table(&cases));
-    if cases.iter().all(check::Case::passed) {
-        Exit::Ok.into()
+    Ok(if cases.iter().all(check::Case::passed) {
+        Exit::Ok
     } else {
-        Exit::Failed.into()
+        Exit::Failed
+    })
+}
+
+/// `uncoil check DIR` on a run's folder: 0 when its files are sound and of one run, else 1.
+fn verify_run(dir: &Path) -> Exit {
+    let problems = check::verify_outputs(dir);
+    for p in &problems {
+        println!("{}: {p}", dir.display());
     }
+    if !problems.is_empty() {
+        return Exit::Failed;
+    }
+    println!(
+        "{}: the files are sound and belong to one run",
+        dir.display()
+    );
+    if let Some(line) = check::salvage::describe(dir) {
+        println!("{}: {line}", dir.display());
+    }
+    Exit::Ok
 }
 
 /// `uncoil check DIR --salvage`: keeps what a killed run wrote (see
 /// [`check::salvage`]). Exit 0 when salvaged, 2 when `DIR` is not a killed run's folder,
 /// 1 when there is nothing to keep or a file could not be written.
-fn salvage_run(dir: &Path) -> ExitCode {
-    use check::salvage::SalvageError;
-    match check::salvage::salvage(dir) {
-        Ok(s) => {
-            for f in &s.written {
-                println!("wrote {}", f.display());
-            }
-            if let Some(line) = check::salvage::describe(dir) {
-                println!("{}: {line}", dir.display());
-            }
-            for line in &s.report.lost {
-                println!("{}: lost: {line}", dir.display());
-            }
-            Exit::Ok.into()
+fn salvage_run(dir: &Path) -> anyhow::Result<Exit> {
+    paths::folder(dir, "a killed run's output folder")?;
+    let s = check::salvage::salvage(dir)?;
+    for f in &s.written {
+        println!("wrote {}", f.display());
+    }
+    if let Some(line) = check::salvage::describe(dir) {
+        println!("{}: {line}", dir.display());
+    }
+    for line in &s.report.lost {
+        println!("{}: lost: {line}", dir.display());
+    }
+    Ok(Exit::Ok)
+}
+
+/// The coil's scene at `path` (a file or a shipped name); a folded chain's is bad input.
+fn coil_scene(path: &Path) -> anyhow::Result<Box<Scene>> {
+    match any_scene_file_with_overrides(path, &[])? {
+        AnyScene::Coil(scene) => Ok(scene),
+        AnyScene::FoldedChain(_) => Err(paths::PathError {
+            path: path.to_owned(),
+            found: "a folded chain's scene, which the paper's equations do not describe".into(),
+            expected: "a coil's scene (`uncoil run` runs a folded chain)".into(),
         }
-        Err(e @ SalvageError::NotKilled(_)) => {
-            eprintln!("error: {e}");
-            Exit::BadInput.into()
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            Exit::Failed.into()
-        }
+        .into()),
     }
 }
 
 /// Loads every scene first (a bad one fails before anything runs), then runs each and
 /// prints its table as soon as it is done.
-fn compare(paths: &[PathBuf]) -> ExitCode {
-    let mut scenes = Vec::with_capacity(paths.len());
-    for path in paths {
-        match Scene::from_file(path) {
-            Ok(s) => scenes.push(s),
-            Err(e) => {
-                eprintln!("error: {e}");
-                return Exit::BadInput.into();
-            }
-        }
-    }
+fn compare(paths: &[PathBuf]) -> anyhow::Result<Exit> {
+    let scenes = paths
+        .iter()
+        .map(|p| coil_scene(p))
+        .collect::<anyhow::Result<Vec<_>>>()?;
     for scene in &scenes {
         eprintln!("running {} ...", scene.name);
         let mut log = SampleLog::default();
-        match run(scene, &mut [&mut log]) {
-            Ok(report) => println!("{}", table(&report, &log.samples)),
-            Err(e) => {
-                eprintln!("error: {e:#}");
-                return Exit::Failed.into();
-            }
-        }
+        let report = run(scene, &mut [&mut log]).with_context(|| scene.name.clone())?;
+        println!("{}", table(&report, &log.samples));
     }
-    Exit::Ok.into()
+    Ok(Exit::Ok)
 }
 
 /// What of a run Foxglove sees.
@@ -384,8 +450,8 @@ fn parse_pace(text: &str) -> Result<f64, String> {
     }
 }
 
-/// Starts the live server of `log`, if asked for.
-fn serve(log: &mut ViewObserver, view: &View) -> anyhow::Result<()> {
+/// Starts the live server of `log`, if asked for; `layout` is the Foxglove layout's file.
+fn serve(log: &mut ViewObserver, view: &View, layout: &Path) -> anyhow::Result<()> {
     let Some(addr) = view.live else {
         return Ok(());
     };
@@ -394,7 +460,8 @@ fn serve(log: &mut ViewObserver, view: &View) -> anyhow::Result<()> {
         let at = log.serve(addr)?;
         eprintln!(
             "serving the run live at ws://{at}: open it in Foxglove (Open connection -> \
-             Foxglove WebSocket) with the layout tools/foxglove-layout.json"
+             Foxglove WebSocket) with the layout {layout}",
+            layout = layout.display()
         );
         if let Some(x) = view.pace {
             log.pace(x);
@@ -403,18 +470,8 @@ fn serve(log: &mut ViewObserver, view: &View) -> anyhow::Result<()> {
     }
     #[cfg(not(feature = "live"))]
     {
-        let _ = (log, view.pace);
+        let _ = (log, view.pace, layout);
         anyhow::bail!("--live {addr}: this uncoil was built without the `live` feature")
-    }
-}
-
-/// Why a folder could not be taken for a run, said, and its exit: 2 if another run holds it,
-/// 1 if it cannot be made.
-fn folder_refused(e: FolderError) -> ExitCode {
-    eprintln!("error: {e:#}");
-    match e {
-        FolderError::Busy { .. } => Exit::BadInput.into(),
-        FolderError::Io(_) => Exit::Failed.into(),
     }
 }
 
@@ -425,17 +482,19 @@ fn run_scene(
     view: &View,
     stop: &AtomicBool,
 ) -> anyhow::Result<(String, StopReason)> {
+    let layout = files.layout_path().unwrap_or_default();
     if let Some(log) = files.view_mut() {
-        serve(log, view)?;
+        serve(log, view, &layout)?;
     }
     eprintln!("running {} into {} ...", scene.name, files.dir().display());
     let report = files.run(scene, None, stop)?;
     let mut text = summary(&report, files.dir());
     if let Some(path) = files.log_path() {
         text.push_str(&format!(
-            "Wrote {0}: open it in Foxglove with the layout tools/foxglove-layout.json, or list \
-             it with `uncoil inspect {0}`\n",
-            path.display()
+            "Wrote {0}: open it in Foxglove with the layout {1}, or list it with `uncoil \
+             inspect {0}`\n",
+            path.display(),
+            layout.display()
         ));
     }
     Ok((text, report.stop))

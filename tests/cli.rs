@@ -68,7 +68,7 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
             "cannot parse scene case: ",
             "line 5, column 11",
             "mass_kg = \"heavy\"",
-            "invalid type: string \"heavy\", expected f64",
+            "invalid type: the text \"heavy\", expected a number",
         ],
     ),
     (
@@ -175,18 +175,18 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
         Edit::Append("[discretisation]\nlinks_per_turn = 32.5"),
         &[
             "cannot parse scene case: ",
-            "invalid type: floating point `32.5`, expected i64",
+            "invalid type: the number `32.5`, expected a whole number",
         ],
     ),
     (
         "boolean mass",
         Edit::Replace("mass_kg = 1.5", "mass_kg = true"),
-        &["invalid type: boolean `true`, expected f64"],
+        &["invalid type: the boolean `true`, expected a number"],
     ),
     (
         "array radius",
         Edit::Replace("outer_radius_m = 0.06", "outer_radius_m = [0.06]"),
-        &["invalid type: sequence, expected f64"],
+        &["invalid type: a list, expected a number"],
     ),
     (
         "unknown contact model",
@@ -476,7 +476,7 @@ fn missing_scene_file_exits_2() {
 }
 
 #[test]
-fn uncreatable_output_folder_exits_1() {
+fn an_output_folder_inside_a_file_exits_2() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("case.toml");
     std::fs::write(&scene, BASE).unwrap();
@@ -485,12 +485,13 @@ fn uncreatable_output_folder_exits_1() {
     let out = blocker.join("sub");
     run_command(&scene, &out)
         .assert()
-        .code(1)
+        .code(2)
         .stdout(predicate::str::is_empty())
-        .stderr(predicate::str::starts_with(
-            "error: cannot create output folder ",
-        ))
-        .stderr(predicate::str::contains(out.display().to_string()));
+        .stderr(format!(
+            "error: {}: {} is a file; expected an output folder (made if missing)\n",
+            out.display(),
+            blocker.display()
+        ));
     assert!(blocker.is_file(), "the blocking file was replaced");
 }
 
@@ -551,7 +552,7 @@ fn unreadable_scene_files_exit_2() {
 }
 
 #[test]
-fn output_folder_that_is_a_file_exits_1() {
+fn output_folder_that_is_a_file_exits_2() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("case.toml");
     std::fs::write(&scene, BASE).unwrap();
@@ -559,10 +560,11 @@ fn output_folder_that_is_a_file_exits_1() {
     std::fs::write(&out, "a regular file").unwrap();
     run_command(&scene, &out)
         .assert()
-        .code(1)
+        .code(2)
         .stdout(predicate::str::is_empty())
-        .stderr(predicate::str::starts_with(
-            "error: cannot create output folder ",
+        .stderr(format!(
+            "error: {}: a file; expected an output folder (made if missing)\n",
+            out.display()
         ));
     assert_eq!(std::fs::read_to_string(&out).unwrap(), "a regular file");
 }

@@ -455,7 +455,7 @@ fn check_runs_a_folder_and_tabulates_every_outcome() {
         .assert()
         .code(2)
         .stderr(predicate::str::contains(
-            "error: no scene files (*.toml) in",
+            "empty: a folder with no scene files (*.toml)",
         ));
     Command::cargo_bin("uncoil")
         .unwrap()
@@ -463,7 +463,9 @@ fn check_runs_a_folder_and_tabulates_every_outcome() {
         .arg(dir.path().join("missing"))
         .assert()
         .code(2)
-        .stderr(predicate::str::contains("error: cannot read scene folder "));
+        .stderr(predicate::str::contains(
+            "missing: no such file or folder; expected a folder of scene files",
+        ));
 }
 
 /// Largest |omega_rad_s| (the coil's spin) in a written `samples.csv`.

@@ -468,7 +468,7 @@ fn inspect_reads_a_cut_off_file_as_far_as_its_data_goes() {
 }
 
 #[test]
-fn inspect_of_a_file_that_is_not_mcap_exits_1() {
+fn inspect_of_a_file_that_is_not_mcap_exits_2() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("x.mcap");
     std::fs::write(&path, "not an MCAP file").unwrap();
@@ -477,8 +477,11 @@ fn inspect_of_a_file_that_is_not_mcap_exits_1() {
         .arg("inspect")
         .arg(&path)
         .assert()
-        .code(1)
-        .stderr(predicate::str::starts_with("error: not an MCAP file"));
+        .code(2)
+        .stderr(predicate::str::ends_with(
+            "x.mcap: a file that is not MCAP (no MCAP magic bytes); expected an MCAP log, e.g. \
+             runs/yoga-mat/run.mcap\n",
+        ));
 }
 
 /// A small scene that runs for a long time: a tiny step over a long push.

@@ -1,10 +1,17 @@
-//! The exit codes of `uncoil`, decided here and nowhere else: what each means, and how a
-//! run's end maps to one. Every command returns one of these.
+//! The exit codes of `uncoil`, decided here and nowhere else: what each means, how a run's
+//! end maps to one, and which errors are bad input. Every command returns one of these.
 
 use std::process::ExitCode;
 
+use uncoil::output::folder::FolderError;
 use uncoil::run::signals::{self, Signal};
 use uncoil::run::stop::Status;
+use uncoil::scene::SceneError;
+use uncoil::scene::overrides::OverrideSyntaxError;
+use uncoil::study::check::salvage::SalvageError;
+use uncoil::study::sweep::{CombinationError, NotOneSweep};
+
+use crate::cli::paths::PathError;
 
 /// How `uncoil` ends.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -14,9 +21,10 @@ pub enum Exit {
     /// 1: a failure while running: a file that could not be read or written, a run that
     /// failed, a merge with something missing, a check that found a problem.
     Failed,
-    /// 2: bad input: a scene, an argument, an output folder another run holds, files that
-    /// are not of one sweep (to merge or resume), a folder that is not a killed run's (to
-    /// salvage); nothing is written.
+    /// 2: bad input: a scene, an argument, a path that is missing or not of the kind the
+    /// command expects (a folder for a file, a file for a folder, a file of another kind), an
+    /// output folder another run holds, files that are not of one sweep (to merge or
+    /// resume), a folder that is not a killed run's (to salvage); nothing is written.
     BadInput,
     /// 3: a guard stopped a run (its outputs hold everything up to the stop).
     Stopped,
@@ -36,6 +44,24 @@ impl Exit {
         }
     }
 
+    /// The exit of a command that failed with `error`: [`Exit::BadInput`] when anything in
+    /// its chain is an input's fault (a scene, an override, a sweep's combination, a path, an output folder another
+    /// run holds, files not of one sweep, a folder that is not a killed run's), else
+    /// [`Exit::Failed`].
+    pub fn of_error(error: &anyhow::Error) -> Self {
+        let bad = error.chain().any(|cause| {
+            cause.is::<SceneError>()
+                || cause.is::<OverrideSyntaxError>()
+                || cause.is::<PathError>()
+                || cause.is::<Usage>()
+                || cause.is::<NotOneSweep>()
+                || cause.is::<CombinationError>()
+                || matches!(cause.downcast_ref(), Some(FolderError::Busy { .. }))
+                || matches!(cause.downcast_ref(), Some(SalvageError::NotKilled(_)))
+        });
+        if bad { Self::BadInput } else { Self::Failed }
+    }
+
     /// The process's exit code.
     pub fn code(self) -> u8 {
         match self {
@@ -46,6 +72,19 @@ impl Exit {
             Self::Interrupted => signals::received().unwrap_or(Signal::Int).exit_code(),
         }
     }
+}
+
+/// An argument, or a combination of them, that the command cannot take: bad input (exit 2).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct Usage(pub String);
+
+/// Says `error` on stderr (`error: ` and its chain) and returns its exit
+/// ([`Exit::of_error`]).
+pub fn fail(error: impl Into<anyhow::Error>) -> ExitCode {
+    let error = error.into();
+    eprintln!("error: {error:#}");
+    Exit::of_error(&error).into()
 }
 
 impl From<Exit> for ExitCode {

@@ -1,26 +1,28 @@
-//! The `sweep` and `sweep-report` subcommands of the binary: arguments, output folders,
-//! messages and exit codes around [`uncoil::study::sweep`], [`uncoil::study::analysis`] and
-//! [`uncoil::study::plot`]. No sweep logic lives here.
+//! The `sweep` and `sweep-report` subcommands of the binary: arguments, output folders and
+//! messages around [`uncoil::study::sweep`], [`uncoil::study::analysis`] and
+//! [`uncoil::study::plot`]; their exits are [`Exit`]'s. No sweep logic lives here.
 
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
 
-use crate::cli::exit::Exit;
+use crate::cli::exit::{Exit, Usage};
+use crate::cli::paths::{self, PathError};
 
 use clap::{Args, ValueEnum};
 
 use uncoil::output::write_atomic;
 use uncoil::run::signals;
+use uncoil::scene::read_scene_file;
+use uncoil::scene::shipped;
 use uncoil::study::analysis::{Reference, SweepAnalysis};
 use uncoil::study::sweep::{
-    Col, NotOneSweep, Shard, Sweep, SweepOptions, SweepOutcome, SweepTable, Vary, merge,
-    write_merged,
+    Col, Shard, Sweep, SweepOptions, SweepOutcome, SweepTable, Vary, merge, write_merged,
 };
 
 /// Arguments of `uncoil sweep`.
 #[derive(Args)]
 pub struct SweepArgs {
-    /// The scene file (TOML) to vary.
+    /// The coil's scene to vary: a scene file (TOML), e.g. scenes/yoga-mat.toml, or a
+    /// shipped scene's name, e.g. yoga-mat.
     #[arg(required_unless_present = "merge")]
     scene: Option<PathBuf>,
     /// A key and its values, e.g. `--vary discretisation.links_per_turn=16,32,64`; several
@@ -78,7 +80,7 @@ enum CostArg {
 /// Arguments of `uncoil sweep-report`.
 #[derive(Args)]
 pub struct ReportArgs {
-    /// A sweep file (sweep.csv).
+    /// A sweep's folder (with its sweep.csv), e.g. sweeps/yoga-mat, or a sweep file.
     sweep: PathBuf,
     /// Output folder for report.md and the SVGs (default: the sweep file's folder).
     #[arg(long)]
@@ -127,76 +129,64 @@ fn folder_of(p: &Path) -> PathBuf {
 }
 
 /// `uncoil sweep --merge`: 0 merged (whole, or partial with `--allow-partial`), 1 a file
-/// could not be read or written, or something is missing without `--allow-partial`.
-fn merge_command(files: &[PathBuf], dir: &Path, allow_partial: bool) -> ExitCode {
-    let merged = match merge(files) {
-        Ok(m) => m,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            return if e.downcast_ref::<NotOneSweep>().is_some() {
-                Exit::BadInput
-            } else {
-                Exit::Failed
-            }
-            .into();
-        }
-    };
+/// could not be read or written, or something is missing without `--allow-partial`, 2 a
+/// path that is not a sweep file, files that are not of one sweep.
+fn merge_command(files: &[PathBuf], dir: &Path, allow_partial: bool) -> anyhow::Result<Exit> {
+    for file in files {
+        paths::file(
+            file,
+            "a sweep's shard file, e.g. sweeps/big/sweep.1-of-8.csv",
+        )?;
+    }
+    paths::out_folder(dir)?;
+    let merged = merge(files)?;
     let (table, missing) = (&merged.table, &merged.missing);
     let note = dir.join("sweep.missing.txt");
     if !missing.is_empty() && !allow_partial {
         eprint!(
             "error: the merge is incomplete, nothing written (--allow-partial to write it):\n{missing}"
         );
-        return Exit::Failed.into();
+        return Ok(Exit::Failed);
     }
-    let written = write_merged(&merged, dir).and_then(|p| {
-        if missing.is_empty() {
-            uncoil::output::remove_stale(&note)?;
-        } else {
-            uncoil::output::write_atomic(&note, missing.to_string().as_bytes())?;
-        }
-        Ok(p)
-    });
-    match written {
-        Ok(p) => {
-            println!("merged {} runs into {}", table.rows.len(), p.display());
-            if !missing.is_empty() {
-                print!("partial, as {} says:\n{missing}", note.display());
-            }
-            Exit::Ok.into()
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            Exit::Failed.into()
-        }
+    let p = write_merged(&merged, dir)?;
+    if missing.is_empty() {
+        uncoil::output::remove_stale(&note)?;
+    } else {
+        uncoil::output::write_atomic(&note, missing.to_string().as_bytes())?;
     }
+    println!("merged {} runs into {}", table.rows.len(), p.display());
+    if !missing.is_empty() {
+        print!("partial, as {} says:\n{missing}", note.display());
+    }
+    println!(
+        "draw its report with: uncoil sweep-report {}",
+        dir.display()
+    );
+    Ok(Exit::Ok)
 }
 
 /// `uncoil sweep`: 0 every run ended, 1 a run failed or a file could not be written,
-/// 2 bad input (a combination's scene is invalid; files that are not of one sweep, to merge
-/// or resume), 3 a guard stopped a run (and none failed), 130, 143 or 129 a signal stopped
-/// it (SIGINT, SIGTERM, SIGHUP: the runs in progress are rows marked `interrupted`, which
-/// `--resume` runs again).
-pub fn sweep(args: SweepArgs) -> ExitCode {
+/// 2 bad input (a scene or a path missing or of the wrong kind, a combination's scene
+/// invalid; files that are not of one sweep, to merge or resume), 3 a guard stopped a run
+/// (and none failed), 130, 143 or 129 a signal stopped it (SIGINT, SIGTERM, SIGHUP: the
+/// runs in progress are rows marked `interrupted`, which `--resume` runs again).
+pub fn sweep(args: SweepArgs) -> anyhow::Result<Exit> {
     if !args.merge.is_empty() {
         let dir = args.out.unwrap_or_else(|| folder_of(&args.merge[0]));
         return merge_command(&args.merge, &dir, args.allow_partial);
     }
     let scene_path = args.scene.expect("clap requires SCENE without --merge");
-    let text = match std::fs::read_to_string(&scene_path) {
-        Ok(t) => t,
-        Err(e) => {
-            eprintln!(
-                "error: cannot read scene file {}: {e}",
-                scene_path.display()
-            );
-            return Exit::BadInput.into();
+    let (text, stem) = read_scene_file(&scene_path)?;
+    if shipped::kind(&text) != "coil" {
+        return Err(PathError {
+            path: scene_path,
+            found: "a folded chain's scene".into(),
+            expected: "a coil's scene: a sweep varies a coil (`uncoil run` runs a folded \
+                       chain, `--set` varies it)"
+                .into(),
         }
-    };
-    let stem = scene_path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
+        .into());
+    }
     // A key varied twice would be two columns of one name in sweep.csv, and a grid no merge
     // could check.
     if let Some(twice) = args
@@ -205,22 +195,17 @@ pub fn sweep(args: SweepArgs) -> ExitCode {
         .enumerate()
         .find(|(k, v)| args.vary[..*k].iter().any(|w| w.key == v.key))
     {
-        eprintln!(
-            "error: --vary {}: varied twice; give all its values in one --vary",
+        return Err(Usage(format!(
+            "--vary {}: varied twice; give all its values in one --vary",
             twice.1.key
-        );
-        return Exit::BadInput.into();
+        ))
+        .into());
     }
-    let sweep = match Sweep::new(&text, &stem, &args.vary) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return Exit::BadInput.into();
-        }
-    };
+    let sweep = Sweep::new(&text, &stem, &args.vary)?;
     let dir = args
         .out
         .unwrap_or_else(|| PathBuf::from("sweeps").join(&stem));
+    paths::out_folder(&dir)?;
     let opts = SweepOptions {
         shard: args.shard.unwrap_or(Shard::ALL),
         jobs: args.jobs,
@@ -241,68 +226,67 @@ pub fn sweep(args: SweepArgs) -> ExitCode {
         },
         dir.display()
     );
-    ended(sweep.run(&dir, &opts))
+    let all = opts.shard == Shard::ALL;
+    Ok(ended(&sweep.run(&dir, &opts)?, all))
 }
 
-/// What a sweep's end prints, and its exit (see [`sweep`]).
-fn ended(outcome: anyhow::Result<SweepOutcome>) -> ExitCode {
-    match outcome {
-        Ok(o) => {
-            let kept = if o.kept > 0 {
-                format!(", {} kept from before", o.kept)
-            } else {
-                String::new()
-            };
-            println!(
-                "{} runs ({} failed, {} stopped by a guard{kept}) of {} combinations written to {}",
-                o.runs,
-                o.failed,
-                o.stopped,
-                o.grid,
-                o.path.display()
-            );
-            if let Some(signal) = signals::received() {
-                eprintln!(
-                    "interrupted by {signal}: the runs it stopped are rows marked interrupted; \
-                     the same command with --resume runs them and the rest"
-                );
-                return Exit::Interrupted.into();
-            }
-            if o.failed > 0 {
-                Exit::Failed.into()
-            } else if o.stopped > 0 {
-                Exit::Stopped.into()
-            } else {
-                Exit::Ok.into()
-            }
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            if e.downcast_ref::<NotOneSweep>().is_some() {
-                Exit::BadInput.into()
-            } else {
-                Exit::Failed.into()
-            }
-        }
+/// What a sweep's end prints, and its exit (see [`sweep`]); `all` says whether it ran the
+/// whole grid (a shard's file is merged before its report is drawn).
+fn ended(o: &SweepOutcome, all: bool) -> Exit {
+    let kept = if o.kept > 0 {
+        format!(", {} kept from before", o.kept)
+    } else {
+        String::new()
+    };
+    println!(
+        "{} runs ({} failed, {} stopped by a guard{kept}) of {} combinations written to {}",
+        o.runs,
+        o.failed,
+        o.stopped,
+        o.grid,
+        o.path.display()
+    );
+    if let Some(signal) = signals::received() {
+        eprintln!(
+            "interrupted by {signal}: the runs it stopped are rows marked interrupted; \
+             the same command with --resume runs them and the rest"
+        );
+        return Exit::Interrupted;
+    }
+    let dir = folder_of(&o.path);
+    if all {
+        println!(
+            "draw its report with: uncoil sweep-report {}",
+            dir.display()
+        );
+    } else {
+        println!(
+            "once every shard has run, join them with: uncoil sweep --merge {}/sweep.*-of-*.csv",
+            dir.display()
+        );
+    }
+    if o.failed > 0 {
+        Exit::Failed
+    } else if o.stopped > 0 {
+        Exit::Stopped
+    } else {
+        Exit::Ok
     }
 }
 
-/// `uncoil sweep-report`: 0 written, 1 a file could not be read or written.
-pub fn report(args: &ReportArgs) -> ExitCode {
-    match write_report(args) {
-        Ok(md) => {
-            print!("{md}");
-            Exit::Ok.into()
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            Exit::Failed.into()
-        }
+/// `uncoil sweep-report`: 0 written, 1 a file could not be read or written, 2 a path that
+/// is not a sweep's folder or file.
+pub fn report(args: &ReportArgs) -> anyhow::Result<Exit> {
+    let sweep = paths::sweep_file(&args.sweep)?;
+    if let Some(out) = &args.out {
+        paths::out_folder(out)?;
     }
+    print!("{}", write_report(args, &sweep)?);
+    Ok(Exit::Ok)
 }
 
-fn write_report(args: &ReportArgs) -> anyhow::Result<String> {
-    let table = SweepTable::read(&args.sweep)?;
+fn write_report(args: &ReportArgs, sweep: &Path) -> anyhow::Result<String> {
+    let table = SweepTable::read(sweep)?;
     let reference = match args.reference {
         RefArg::Exact => Reference::Exact,
         RefArg::Eq7 => Reference::Eq7,
@@ -311,7 +295,7 @@ fn write_report(args: &ReportArgs) -> anyhow::Result<String> {
         CostArg::Unroll => Col::WallRolling.name(),
         CostArg::Total => Col::Wall.name(),
     };
-    let dir = args.out.clone().unwrap_or_else(|| folder_of(&args.sweep));
+    let dir = args.out.clone().unwrap_or_else(|| folder_of(sweep));
     let title = args.title.clone().unwrap_or_else(|| {
         std::fs::canonicalize(&dir)
             .ok()
@@ -324,12 +308,11 @@ fn write_report(args: &ReportArgs) -> anyhow::Result<String> {
         analysis.studies.clear();
     } else if !args.converge.is_empty() {
         let varied = analysis.table.varied_keys();
-        for k in &args.converge {
-            anyhow::ensure!(
-                varied.contains(k),
+        if let Some(k) = args.converge.iter().find(|k| !varied.contains(k)) {
+            anyhow::bail!(Usage(format!(
                 "--converge {k}: not a varied key of this sweep (varied: {})",
                 varied.join(", ")
-            );
+            )));
         }
         analysis.studies.retain(|s| args.converge.contains(&s.key));
     }

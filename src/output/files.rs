@@ -8,8 +8,8 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use crate::output::background::Background;
-use crate::output::folder::{FolderError, RunFolder, run_id};
-use crate::output::view::ViewObserver;
+use crate::output::folder::{FolderError, LAYOUT, RunFolder, run_id};
+use crate::output::view::{FOXGLOVE_LAYOUT, ViewObserver};
 use crate::output::{CsvObserver, ReportObserver};
 use crate::run::{Observer, RunReport, run_until};
 use crate::scene::Scene;
@@ -34,10 +34,14 @@ pub struct RunFiles {
 }
 
 impl RunFiles {
-    /// Takes `dir` for a run of `scene` (see [`RunFolder::take`]) and wires its files.
+    /// Takes `dir` for a run of `scene` (see [`RunFolder::take`]) and wires its files; a
+    /// run with a view gets the Foxglove layout beside it (`foxglove-layout.json`).
     pub fn take(dir: &Path, scene: &Scene, view: View) -> Result<Self, FolderError> {
         let folder = RunFolder::take(dir, &run_id(&scene.name, &scene.source_text), &scene.name)?;
         let dir = folder.dir();
+        if view != View::Off {
+            crate::output::write_atomic(&dir.join(LAYOUT), FOXGLOVE_LAYOUT.as_bytes())?;
+        }
         let view = match view {
             View::Off => None,
             View::File => Some(ViewObserver::new(dir)),
@@ -49,6 +53,11 @@ impl RunFiles {
             view,
             folder,
         })
+    }
+
+    /// The Foxglove layout written beside the view, if the run has one.
+    pub fn layout_path(&self) -> Option<std::path::PathBuf> {
+        self.view.as_ref().map(|_| self.folder.dir().join(LAYOUT))
     }
 
     /// The folder.

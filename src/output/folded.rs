@@ -12,25 +12,42 @@ use serde::Serialize;
 use crate::output::folder::{FileStamp, REPORT, RunFolder, SAMPLES};
 use crate::output::table::Table;
 use crate::output::{partial_path, write_atomic};
-use crate::run::folded::{ChainEnd, ChainReport, Crossing, run_chain};
+use crate::run::folded::{ChainEnd, ChainReport, ChainSample, Crossing, run_chain};
 use crate::scene::folded::{ChainJoints, FoldedChain};
 
-/// What `report.json` holds for a folded chain: the scene as given and what the run found.
+/// What `report.json` holds for a folded chain: the scene as given and what the run found;
+/// Python's run of a chain without files gets the same, less the run's id and files.
 #[derive(Serialize)]
 struct Written<'a> {
     kind: &'static str,
     scene: &'a FoldedChain,
     report: &'a ChainReport,
     /// The run's id and the files it was written with, as a coil's `report.json` has them.
-    run_id: &'a str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    run_id: Option<&'a str>,
+    #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     files: std::collections::BTreeMap<&'static str, FileStamp>,
 }
 
+/// A folded chain's run as `report.json` has it (kind, scene, report), without the run's id
+/// and files: what Python's `uncoil.run` gives for a chain run without an output folder.
+pub fn chain_report_json(scene: &FoldedChain, report: &ChainReport) -> anyhow::Result<String> {
+    let written = Written {
+        kind: crate::scene::folded::KIND,
+        scene,
+        report,
+        run_id: None,
+        files: std::collections::BTreeMap::new(),
+    };
+    Ok(serde_json::to_string(&written)?)
+}
+
 /// Runs `scene` into `folder` (taken for it, so emptied of earlier runs' files):
-/// `samples.csv` and `report.json`.
+/// `samples.csv` and `report.json`; each sample is also handed to `each`.
 pub fn write_chain_run(
     scene: &FoldedChain,
     folder: &RunFolder,
+    each: &mut dyn FnMut(&ChainSample) -> anyhow::Result<()>,
     stop: &AtomicBool,
 ) -> anyhow::Result<ChainReport> {
     let dir = folder.dir();
@@ -42,7 +59,8 @@ pub fn write_chain_run(
         scene,
         &mut |s| {
             csv.serialize(s)
-                .with_context(|| format!("cannot write {}", tmp.display()))
+                .with_context(|| format!("cannot write {}", tmp.display()))?;
+            each(s)
         },
         stop,
     )?;
@@ -58,7 +76,7 @@ pub fn write_chain_run(
         kind: crate::scene::folded::KIND,
         scene,
         report: &report,
-        run_id: folder.run_id(),
+        run_id: Some(folder.run_id()),
         files: [(SAMPLES, FileStamp::of(&csv_path)?)].into(),
     };
     let mut text = serde_json::to_string_pretty(&written)?;

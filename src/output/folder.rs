@@ -29,6 +29,9 @@ pub const SAMPLES: &str = "samples.csv";
 pub const REPORT: &str = "report.json";
 /// The Foxglove log.
 pub const LOG: &str = "run.mcap";
+/// The Foxglove layout, written beside the log (or for a live view) so that the hint a run
+/// prints names a file that exists wherever it runs.
+pub const LAYOUT: &str = "foxglove-layout.json";
 /// The pictures `uncoil plot` draws from a run's files.
 pub const PLOTS: [&str; 4] = ["motion.svg", "energy.svg", "approach.svg", "forces.svg"];
 /// The lock file.
@@ -96,7 +99,7 @@ impl RunFolder {
                 )
             })
             .with_context(|| format!("cannot write the lock file {}", path.display()))?;
-        for name in [SAMPLES, REPORT, LOG].into_iter().chain(PLOTS) {
+        for name in [SAMPLES, REPORT, LOG, LAYOUT].into_iter().chain(PLOTS) {
             for file in [dir.join(name), crate::output::partial_path(&dir.join(name))] {
                 crate::output::remove_stale(&file)?;
             }

@@ -47,6 +47,10 @@ pub mod file;
 pub mod live;
 mod paint;
 
+/// The Foxglove layout of the channels below (`tools/foxglove-layout.json`, built in): a run
+/// with a view writes it beside its log, as `foxglove-layout.json`.
+pub const FOXGLOVE_LAYOUT: &str = include_str!("../../tools/foxglove-layout.json");
+
 /// Topic of the scene drawings.
 pub const SCENE_TOPIC: &str = "/scene";
 /// Topic of the samples.

@@ -468,7 +468,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let folder = folder::RunFolder::take(dir.path(), "id", "fc").unwrap();
         let stop = AtomicBool::new(false);
-        crate::output::folded::write_chain_run(&chain, &folder, &stop).unwrap();
+        crate::output::folded::write_chain_run(&chain, &folder, &mut |_| Ok(()), &stop).unwrap();
         assert_eq!(verify_outputs(dir.path()), Vec::<String>::new());
         // A samples file that is not the one the report was written with.
         let samples = dir.path().join(folder::SAMPLES);

@@ -120,7 +120,9 @@ impl Sweep {
     }
 
     /// Runs this shard's combinations, appending one row to `dir/`[`file_name`] as each
-    /// run ends. A run that fails or panics gets a `failed: ...` row; the sweep goes on.
+    /// run ends, and at the end puts the rows in the grid's order whatever the runs' order
+    /// ([`in_grid_order`]). A run that fails or panics gets a `failed: ...` row; the sweep
+    /// goes on.
     pub fn run(&self, dir: &Path, opts: &SweepOptions) -> anyhow::Result<SweepOutcome> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create output folder {}", dir.display()))?;
@@ -186,6 +188,7 @@ impl Sweep {
             b.finish_and_clear();
         }
         result?;
+        in_grid_order(&path)?;
         Ok(SweepOutcome {
             path,
             grid: self.combos.len(),
@@ -202,6 +205,24 @@ pub fn read_grid(path: &Path) -> anyhow::Result<GridFile> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     serde_json::from_str(&text).with_context(|| format!("{}: not a sweep's grid", path.display()))
+}
+
+/// Rewrites the sweep file at `path` (atomically) with its rows in the grid's order, by
+/// their index; a file already in order is left as it is. Rows are appended as runs end,
+/// so that a killed sweep keeps every finished one; this orders them once all have ended.
+pub fn in_grid_order(path: &Path) -> anyhow::Result<()> {
+    let mut table = SweepTable::read(path)?;
+    let index = |row: &Vec<String>| row.first().and_then(|i| i.parse::<usize>().ok());
+    if table.rows.is_sorted_by_key(index) {
+        return Ok(());
+    }
+    table.rows.sort_by_key(index);
+    let mut text = csv_line(&table.header) + "\n";
+    for row in &table.rows {
+        text.push_str(&csv_line(row));
+        text.push('\n');
+    }
+    crate::output::write_atomic(path, text.as_bytes())
 }
 
 /// Creates `path` and writes the header line and the `kept` rows, flushed.
@@ -440,6 +461,32 @@ mod tests {
             e,
             "combination 1 (discretisation.links_per_turn=5000): \
              discretisation.links_per_turn = 5000: must be >= 3 and <= 4096"
+        );
+    }
+
+    /// Rows written as runs ended (2, 0, 1) come back in the grid's order; a file already in
+    /// order is not rewritten.
+    #[test]
+    fn rows_are_put_in_the_grid_order() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("sweep.csv");
+        std::fs::write(
+            &path,
+            "index,x,status\n2,c,ok\n0,\"a,b\",ok\n1,b,failed: x\n",
+        )
+        .unwrap();
+        in_grid_order(&path).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(
+            text,
+            "index,x,status\n0,\"a,b\",ok\n1,b,failed: x\n2,c,ok\n"
+        );
+        let before = std::fs::metadata(&path).unwrap().modified().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        in_grid_order(&path).unwrap();
+        assert_eq!(
+            std::fs::metadata(&path).unwrap().modified().unwrap(),
+            before
         );
     }
 }
