@@ -4,11 +4,14 @@
 //! [`SweepAnalysis`](crate::study::analysis::SweepAnalysis). It computes nothing new: every
 //! number drawn is in those files or in the analysis.
 //!
-//! This file holds what both kinds of picture share (ranges, colours, the line chart, the
-//! log-log chart and its legend); a run's pictures are in `run`, a sweep's in `sweep`.
+//! This file holds what both kinds of picture share (ranges, colours, text sizes, the line
+//! chart, the log-log chart, and the legend, placed where it hides least of what is drawn:
+//! [`legend_spot`]); a run's pictures are in `run`, a sweep's in `sweep`.
 
 mod run;
 mod sweep;
+
+use std::ops::Range;
 
 use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
@@ -20,6 +23,9 @@ pub use self::sweep::plot_sweep;
 
 type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 
+/// A point in a drawing backend's pixels (plotters' `BackendCoord`).
+type BackendCoord = (i32, i32);
+
 /// A log-log chart on an SVG area.
 type LogChart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
 /// A linear chart on an SVG area.
@@ -27,6 +33,78 @@ type LinChart<'a, 'b> =
     ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
 const FONT: &str = "sans-serif";
+
+/// Tick labels' height on the page (px), on canvases 900-1000 px wide.
+const TICK_PX: f64 = 16.0;
+/// Axis descriptions' and panel captions' height on the page (px).
+const DESC_PX: f64 = 18.0;
+/// Legend labels' height on the page (px).
+const LEGEND_PX: f64 = 14.0;
+/// Height of the area below a chart (px): the tick (5 px), its gap (10), a tick label, a
+/// gap and the axis description, none cut off.
+const X_LABEL_AREA_PX: u32 = 62;
+/// Width of the area left of a chart (px): the description turned upright, a gap, tick
+/// labels up to 6 characters ("-0.005"), their gap (10) and the tick.
+const Y_LABEL_AREA_PX: u32 = 100;
+/// Space around a chart (px).
+const MARGIN_PX: u32 = 12;
+
+/// A font about `px` pixels high on the page: plotters' SVG writes a size s as s / 1.24 px
+/// (and lays text out by the same rule), and takes whole sizes only, so it is given the
+/// whole number nearest 1.24 `px` (16 px: 20, written 16.1 px; 18 px: 22, 17.7 px).
+fn font(px: f64) -> (&'static str, f64) {
+    (FONT, (1.24 * px).round())
+}
+
+/// A log axis's tick labels, `{v:.0e}`: the powers of ten and as many of their multiples
+/// as leave room between the labels; the others' ticks stay unlabelled.
+#[derive(Debug, Clone, Copy)]
+struct LogTicks {
+    /// The mantissas labelled.
+    keep: &'static [u8],
+}
+
+impl LogTicks {
+    /// Labels for an axis spanning `(lo, hi)` over `len_px`, each label needing `room_px`
+    /// along it (a tick label's width on an x axis, its height on a y axis).
+    fn new((lo, hi): (f64, f64), len_px: u32, room_px: f64) -> Self {
+        const SETS: [&[u8]; 4] = [
+            &[1, 2, 3, 4, 5, 6, 7, 8, 9],
+            &[1, 2, 3, 5],
+            &[1, 2, 5],
+            &[1],
+        ];
+        let per_decade = f64::from(len_px) / (hi / lo).log10().max(1e-9);
+        // The narrowest gap between two labels of a set, in decades (9 to 10 for all).
+        let narrowest = |set: &[u8]| {
+            set.iter()
+                .zip(set.iter().skip(1).chain([&10]))
+                .map(|(a, b)| (f64::from(*b) / f64::from(*a)).log10())
+                .fold(1.0, f64::min)
+        };
+        let keep = SETS
+            .into_iter()
+            .find(|set| narrowest(set) * per_decade >= room_px)
+            .unwrap_or(&[1]);
+        Self { keep }
+    }
+
+    /// The label of tick `v`: blank unless its mantissa is kept.
+    fn label(self, v: &f64) -> String {
+        let s = format!("{v:.0e}");
+        let mantissa = s.bytes().next().map_or(0, |c| c.wrapping_sub(b'0'));
+        if self.keep.contains(&mantissa) {
+            s
+        } else {
+            String::new()
+        }
+    }
+}
+
+/// The room a tick label needs along an x axis (px): five characters and a gap.
+const X_TICK_ROOM_PX: f64 = 3.5 * TICK_PX;
+/// The room a tick label needs along a y axis (px): its height and a gap.
+const Y_TICK_ROOM_PX: f64 = 1.5 * TICK_PX;
 
 fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow::anyhow!("cannot draw: {e}")
@@ -122,10 +200,44 @@ impl Line {
 /// Length of a legend swatch (px).
 const SWATCH_PX: u32 = 20;
 
+/// What a chart has drawn that its legend must not hide, and the legend's labels:
+/// [`draw_line`] and [`draw_markers`] add to it, [`legend`] places the legend by it.
+#[derive(Debug, Default)]
+struct Drawn {
+    /// Each line drawn (a marker: a line of one point), in the backend's pixels.
+    ink: Vec<Vec<BackendCoord>>,
+    /// The legend's labels, in order.
+    labels: Vec<String>,
+}
+
+impl Drawn {
+    /// Books `points` of `chart`'s data as drawn, as one line or as `markers`, under `label`.
+    fn book<DB, CT>(
+        &mut self,
+        chart: &ChartContext<'_, DB, CT>,
+        points: &[CT::From],
+        markers: bool,
+        label: String,
+    ) where
+        DB: DrawingBackend,
+        CT: CoordTranslate,
+    {
+        let px = points.iter().map(|p| chart.as_coord_spec().translate(p));
+        if markers {
+            self.ink.extend(px.map(|p| vec![p]));
+        } else {
+            self.ink.push(px.collect());
+        }
+        self.labels.push(label);
+    }
+}
+
 /// Draws `points` as `line` on `chart` under `label`, with a legend swatch drawn as the
-/// line is: one stroke for a solid line, the same dashes for a dashed one.
+/// line is: one stroke for a solid line, the same dashes for a dashed one; books it in
+/// `drawn`.
 fn draw_line<'a, DB, CT>(
     chart: &mut ChartContext<'a, DB, CT>,
+    drawn: &mut Drawn,
     points: Vec<CT::From>,
     line: Line,
     label: impl Into<String>,
@@ -135,6 +247,8 @@ where
     CT: CoordTranslate,
     CT::From: Clone + 'static,
 {
+    let label = label.into();
+    drawn.book(chart, &points, false, label.clone());
     let style = line.style();
     let anno = match line.dash {
         None => chart.draw_series(LineSeries::new(points, style)),
@@ -149,6 +263,110 @@ where
     Ok(())
 }
 
+/// Draws `points` as circles of 4 px in `style` (filled or an outline) on `chart` under
+/// `label`, the legend's marker the same; books them in `drawn`.
+fn draw_markers(
+    chart: &mut LogChart<'_, '_>,
+    drawn: &mut Drawn,
+    points: &[(f64, f64)],
+    style: ShapeStyle,
+    label: String,
+) -> anyhow::Result<()> {
+    drawn.book(chart, points, true, label.clone());
+    chart
+        .draw_series(points.iter().map(|&p| Circle::new(p, 4, style)))
+        .map_err(err)?
+        .label(label)
+        .legend(move |(x, y)| Circle::new((x + 10, y), 4, style));
+    Ok(())
+}
+
+/// Where a chart's legend goes so that it hides no curve: of plotters' nine places in the
+/// plotting area `(xs, ys)` (its pixel ranges), the one whose box of `size` (w, h px),
+/// widened by 4 px, covers the fewest points of `ink` (the chart's lines as drawn, in
+/// pixels, each walked in steps of at most 2 px, so that a line counts by its length, not
+/// by its samples; a marker is one point); if none is free, still the one with fewest. On a
+/// tie the first of: the corners (upper right, upper left, lower right, lower left), the
+/// sides' middles, the centre.
+fn legend_spot(
+    (xs, ys): (Range<i32>, Range<i32>),
+    (w, h): (i32, i32),
+    ink: &[Vec<BackendCoord>],
+) -> SeriesLabelPosition {
+    use SeriesLabelPosition::*;
+    // plotters' layout: 5 px in from the area's sides, or centred.
+    let (aw, ah) = (xs.end - xs.start, ys.end - ys.start);
+    let places = [
+        (UpperRight, aw - w - 5, 5),
+        (UpperLeft, 5, 5),
+        (LowerRight, aw - w - 5, ah - h - 5),
+        (LowerLeft, 5, ah - h - 5),
+        (MiddleRight, aw - w - 5, (ah - h) / 2),
+        (MiddleLeft, 5, (ah - h) / 2),
+        (UpperMiddle, (aw - w) / 2, 5),
+        (LowerMiddle, (aw - w) / 2, ah - h - 5),
+        (MiddleMiddle, (aw - w) / 2, (ah - h) / 2),
+    ];
+    let boxes: Vec<[f64; 4]> = places
+        .iter()
+        .map(|(_, x, y)| {
+            let (x0, y0) = (f64::from(xs.start + x - 4), f64::from(ys.start + y - 4));
+            [x0, y0, x0 + f64::from(w + 8), y0 + f64::from(h + 8)]
+        })
+        .collect();
+    let mut covered = vec![0_usize; places.len()];
+    let mut count = |(x, y): (f64, f64)| {
+        for (n, b) in covered.iter_mut().zip(&boxes) {
+            *n += usize::from(x >= b[0] && x <= b[2] && y >= b[1] && y <= b[3]);
+        }
+    };
+    for line in ink {
+        let at = |i: usize| (f64::from(line[i].0), f64::from(line[i].1));
+        for i in 0..line.len() {
+            count(at(i));
+            if let Some(j) = (i + 1 < line.len()).then_some(i + 1) {
+                let ((x0, y0), (x1, y1)) = (at(i), at(j));
+                let steps = ((x1 - x0).hypot(y1 - y0) / 2.0).ceil().min(4000.0);
+                for k in 1..steps as usize {
+                    let s = k as f64 / steps;
+                    count((x0 + s * (x1 - x0), y0 + s * (y1 - y0)));
+                }
+            }
+        }
+    }
+    let best = (0..places.len()).min_by_key(|&i| covered[i]).unwrap_or(0);
+    places[best].0.clone()
+}
+
+/// Draws `chart`'s legend, of `drawn`'s labels, where it hides least of what `drawn` holds
+/// ([`legend_spot`]), its box as plotters lays it out (labels at [`LEGEND_PX`], a margin of
+/// 10 px, 30 px for the swatches).
+fn legend<'a, DB, CT>(chart: &mut ChartContext<'a, DB, CT>, drawn: &Drawn) -> anyhow::Result<()>
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate,
+{
+    let style = TextStyle::from(font(LEGEND_PX).into_font());
+    let mut text = MultiLineText::<BackendCoord, &str>::new((0, 0), &style);
+    for label in &drawn.labels {
+        text.push_line(label.as_str());
+    }
+    let (w, h) = text.estimate_dimension().map_err(err)?;
+    let (margin, swatches) = (10, 30);
+    let size = (w + swatches + 2 * margin, h + 2 * margin);
+    let at = legend_spot(chart.plotting_area().get_pixel_range(), size, &drawn.ink);
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(at)
+        .margin(margin)
+        .legend_area_size(swatches)
+        .label_font(font(LEGEND_PX))
+        .draw()
+        .map_err(err)
+}
+
 /// One curve of a line chart.
 struct Curve<'a> {
     label: &'a str,
@@ -157,55 +375,54 @@ struct Curve<'a> {
     dashed: bool,
 }
 
+/// A line chart of `curves` on `area`, with what `extra` draws on it (booked in the
+/// [`Drawn`] it is given), and its legend where it hides least ([`legend`]).
 fn line_chart(
     area: &Area<'_>,
     caption: &str,
     x_desc: &str,
     y_desc: &str,
     curves: &[Curve<'_>],
-    legend_at: SeriesLabelPosition,
-    extra: impl FnOnce(&mut LinChart<'_, '_>) -> anyhow::Result<()>,
+    extra: impl FnOnce(&mut LinChart<'_, '_>, &mut Drawn) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
     let (x0, x1) = range(curves.iter().flat_map(|c| c.points.iter().map(|p| p.0)));
     let (y0, y1) = range(curves.iter().flat_map(|c| c.points.iter().map(|p| p.1)));
     let mut chart = ChartBuilder::on(area)
-        .caption(caption, (FONT, 18))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
+        .caption(caption, font(DESC_PX))
+        .margin(MARGIN_PX)
+        .x_label_area_size(X_LABEL_AREA_PX)
+        .y_label_area_size(Y_LABEL_AREA_PX)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(err)?;
     chart
         .configure_mesh()
         .x_desc(x_desc)
         .y_desc(y_desc)
+        .label_style(font(TICK_PX))
+        .axis_desc_style(font(DESC_PX))
         .light_line_style(WHITE.mix(0.0))
         .draw()
         .map_err(err)?;
+    let mut drawn = Drawn::default();
     for c in curves {
         draw_line(
             &mut chart,
+            &mut drawn,
             c.points.clone(),
             Line::curve(c.color, c.dashed),
             c.label,
         )?;
     }
-    extra(&mut chart)?;
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(legend_at)
-        .label_font((FONT, 14))
-        .draw()
-        .map_err(err)?;
-    Ok(())
+    extra(&mut chart, &mut drawn)?;
+    legend(&mut chart, &drawn)
 }
 
 const SIM: RGBColor = RGBColor(0, 0, 0);
 const EXACT: RGBColor = RGBColor(31, 119, 180);
 const EQ7: RGBColor = RGBColor(214, 39, 40);
 
+/// A log-log chart on `area` spanning `xs` and `ys`, its mesh drawn, its ticks labelled by
+/// [`LogTicks`].
 fn log_chart<'a, 'b>(
     area: &'a Area<'b>,
     caption: &str,
@@ -217,38 +434,29 @@ fn log_chart<'a, 'b>(
     let (x0, x1) = log_range(xs);
     let (y0, y1) = log_range(ys);
     let mut chart = ChartBuilder::on(area)
-        .caption(caption, (FONT, 18))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(80)
+        .caption(caption, font(DESC_PX))
+        .margin(MARGIN_PX)
+        .x_label_area_size(X_LABEL_AREA_PX)
+        .y_label_area_size(Y_LABEL_AREA_PX)
         .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
         .map_err(err)?;
+    let (w, h) = chart.plotting_area().dim_in_pixel();
+    let x_ticks = LogTicks::new((x0, x1), w, X_TICK_ROOM_PX);
+    let y_ticks = LogTicks::new((y0, y1), h, Y_TICK_ROOM_PX);
     chart
         .configure_mesh()
         .x_desc(x_desc)
         .y_desc(y_desc)
         .x_labels(20)
         .y_labels(20)
-        .x_label_formatter(&|v| format!("{v:.0e}"))
-        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .x_label_formatter(&|v| x_ticks.label(v))
+        .y_label_formatter(&|v| y_ticks.label(v))
+        .label_style(font(TICK_PX))
+        .axis_desc_style(font(DESC_PX))
         .light_line_style(WHITE.mix(0.0))
         .draw()
         .map_err(err)?;
     Ok(chart)
-}
-
-fn legend<'a, DB: DrawingBackend + 'a>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>,
-    pos: SeriesLabelPosition,
-) -> anyhow::Result<()> {
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(pos)
-        .label_font((FONT, 13))
-        .draw()
-        .map_err(|e| anyhow::anyhow!("cannot draw: {e}"))
 }
 
 fn color(i: usize) -> RGBColor {
@@ -263,4 +471,112 @@ fn color(i: usize) -> RGBColor {
         RGBColor(23, 190, 207),
     ];
     C[i % C.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A plotting area of 800 x 300 px at (100, 50), as [`legend_spot`] takes it.
+    fn area() -> (Range<i32>, Range<i32>) {
+        (100..900, 50..350)
+    }
+
+    #[test]
+    fn the_legend_leaves_a_curve_s_start_free() {
+        // A falling curve from the upper left, as r(t): the upper left holds its start, the
+        // upper right is free.
+        let falling = vec![vec![(100, 55), (500, 150), (900, 345)]];
+        let at = legend_spot(area(), (200, 80), &falling);
+        assert_eq!(at, SeriesLabelPosition::UpperRight);
+        // A rising curve from the lower left, as x'(t) near its end: the upper left is free.
+        let rising = vec![vec![(100, 345), (700, 300), (900, 55)]];
+        let at = legend_spot(area(), (200, 80), &rising);
+        assert_eq!(at, SeriesLabelPosition::UpperLeft);
+    }
+
+    #[test]
+    fn a_line_counts_by_its_length_not_its_samples() {
+        // Two samples only, across the top: both upper corners are covered between them.
+        let across = vec![vec![(100, 60), (900, 60)]];
+        let at = legend_spot(area(), (200, 80), &across);
+        assert_eq!(at, SeriesLabelPosition::LowerRight);
+    }
+
+    #[test]
+    fn with_no_place_free_the_legend_takes_the_least_covered() {
+        // Markers everywhere, thinner in the lower left.
+        let mut ink = Vec::new();
+        for x in (100..900).step_by(10) {
+            for y in (50..350).step_by(10) {
+                if x > 350 || y < 250 || (x + y) % 40 == 0 {
+                    ink.push(vec![(x, y)]);
+                }
+            }
+        }
+        let at = legend_spot(area(), (200, 80), &ink);
+        assert_eq!(at, SeriesLabelPosition::LowerLeft);
+    }
+
+    #[test]
+    fn a_line_chart_s_legend_is_drawn_off_its_curve() {
+        let mut svg = String::new();
+        {
+            let root = SVGBackend::with_string(&mut svg, (900, 400)).into_drawing_area();
+            let falling: Vec<(f64, f64)> = (0..=100)
+                .map(|i| (f64::from(i), 1.0 - (f64::from(i) / 100.0).powi(4)))
+                .collect();
+            let curve = Curve {
+                label: "simulation",
+                points: falling,
+                color: SIM,
+                dashed: false,
+            };
+            line_chart(&root, "r", "t (s)", "r (m)", &[curve], |_, _| Ok(())).unwrap();
+            root.present().unwrap();
+        }
+        // The legend's box (drawn at opacity 0.85) and the curve's first point (the one
+        // line of width 2).
+        let tag_at = |mark: &str, open: &str| {
+            let i = svg
+                .find(mark)
+                .unwrap_or_else(|| panic!("no {mark} in {svg}"));
+            let start = svg[..i].rfind(open).unwrap();
+            svg[start..].split_once('>').unwrap().0.to_owned()
+        };
+        let rect = tag_at("opacity=\"0.85\"", "<rect");
+        let line = tag_at("stroke-width=\"2\"", "<polyline");
+        let num = |key: &str| -> f64 {
+            let v = rect.split(&format!(" {key}=\"")).nth(1).unwrap();
+            v.split('"').next().unwrap().parse().unwrap()
+        };
+        let first = line.split("points=\"").nth(1).unwrap();
+        let (x, y) = first
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .split_once(',')
+            .unwrap();
+        let (x, y): (f64, f64) = (x.parse().unwrap(), y.parse().unwrap());
+        let [bx, by, bw, bh] = ["x", "y", "width", "height"].map(num);
+        assert!(
+            !(x >= bx && x <= bx + bw && y >= by && y <= by + bh),
+            "the legend ({bx}, {by}, {bw} x {bh}) covers the curve's start ({x}, {y})"
+        );
+    }
+
+    #[test]
+    fn log_ticks_label_what_has_room() {
+        // Two decades over 800 px: 400 px a decade, room for 1, 2, 3 and 5 at 56 px each.
+        let ticks = LogTicks::new((1e-3, 1e-1), 800, X_TICK_ROOM_PX);
+        let labels: Vec<String> = [1e-2, 2e-2, 3e-2, 4e-2, 5e-2, 7e-2]
+            .iter()
+            .map(|v| ticks.label(v))
+            .collect();
+        assert_eq!(labels, ["1e-2", "2e-2", "3e-2", "", "5e-2", ""]);
+        // Six decades over 300 px: the powers of ten alone.
+        let ticks = LogTicks::new((1e-7, 1e-1), 300, X_TICK_ROOM_PX);
+        assert_eq!(ticks.label(&2e-3), "");
+        assert_eq!(ticks.label(&1e-3), "1e-3");
+    }
 }

@@ -8,7 +8,8 @@ use anyhow::Context as _;
 use plotters::prelude::*;
 
 use super::{
-    Area, Curve, EQ7, EXACT, FONT, LinChart, Line, LogChart, SIM, color, draw_line, err, legend,
+    Area, Curve, DESC_PX, Drawn, EQ7, EXACT, LinChart, Line, LogChart, LogTicks, MARGIN_PX, SIM,
+    TICK_PX, X_LABEL_AREA_PX, X_TICK_ROOM_PX, Y_LABEL_AREA_PX, color, draw_line, err, font, legend,
     line_chart, log_chart, log_range, pairs, positive_pairs, range,
 };
 use crate::output::folder::{REPORT, SAMPLES};
@@ -150,8 +151,7 @@ fn motion_plot(path: &Path, run: &WrittenRun) -> anyhow::Result<()> {
         "t (s)",
         "r (m)",
         &against_references(tr, &r),
-        SeriesLabelPosition::UpperLeft,
-        |_| Ok(()),
+        |_, _| Ok(()),
     )?;
     let v = [
         run.cut("xdot_m_s")?,
@@ -164,8 +164,7 @@ fn motion_plot(path: &Path, run: &WrittenRun) -> anyhow::Result<()> {
         "t (s)",
         "x' (m/s)",
         &against_references(tr, &v),
-        SeriesLabelPosition::UpperLeft,
-        |_| Ok(()),
+        |_, _| Ok(()),
     )?;
     root.present().map_err(err)?;
     Ok(())
@@ -201,8 +200,7 @@ fn energy_plot(path: &Path, run: &WrittenRun) -> anyhow::Result<()> {
         "t (s)",
         "energy (J)",
         &ledger_curves(run, t, &k, &p, &d),
-        SeriesLabelPosition::MiddleLeft,
-        |chart| match bang_t {
+        |chart, drawn| match bang_t {
             Some(b) => {
                 let y = range(
                     k.iter()
@@ -211,7 +209,7 @@ fn energy_plot(path: &Path, run: &WrittenRun) -> anyhow::Result<()> {
                         .copied()
                         .chain([run.e0, run.mgr]),
                 );
-                mark_bang_start(chart, b, y)
+                mark_bang_start(chart, drawn, b, y)
             }
             None => Ok(()),
         },
@@ -270,15 +268,18 @@ fn ledger_curves<'a>(
     ]
 }
 
-/// A dashed vertical line at `b`, the start of the final bang, over `(y0, y1)`.
+/// A dashed vertical line at `b`, the start of the final bang, over `(y0, y1)`, booked in
+/// `drawn`.
 fn mark_bang_start(
     chart: &mut LinChart<'_, '_>,
+    drawn: &mut Drawn,
     b: f64,
     (y0, y1): (f64, f64),
 ) -> anyhow::Result<()> {
     let c = RGBColor(148, 103, 189);
     draw_line(
         chart,
+        drawn,
         vec![(b, y0), (b, y1)],
         Line::dashed(c, 1, 4, 4),
         "final bang begins",
@@ -294,7 +295,7 @@ fn forces_plot(
     name: &str,
 ) -> anyhow::Result<()> {
     type Spec = (&'static str, &'static str, RGBColor, bool);
-    let panels: [(String, &str, Vec<Spec>, SeriesLabelPosition); 2] = [
+    let panels: [(String, &str, Vec<Spec>); 2] = [
         (
             format!("{name}: upward force on the moving part, N_tot (link-period means)"),
             "N_tot (N)",
@@ -303,7 +304,6 @@ fn forces_plot(
                 ("exact-geometry model", "n_tot_geo_n", EXACT, true),
                 ("paper (eq. 9, A4)", "n_tot_ref_n", EQ7, true),
             ],
-            SeriesLabelPosition::UpperRight,
         ),
         (
             format!("{name}: F_tot = F (floor) + F_int (laid tape), +x positive"),
@@ -316,14 +316,13 @@ fn forces_plot(
                 ("F_int simulation", "f_int_n", EQ7, false),
                 ("F_int exact (least pull)", "f_int_geo_n", EQ7, true),
             ],
-            SeriesLabelPosition::LowerLeft,
         ),
     ];
     let root = SVGBackend::new(path, (900, 800)).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
     let areas = root.split_evenly((2, 1));
     let f = cut("laid_fraction")?;
-    for (area, (caption, y_desc, specs, legend_at)) in areas.iter().zip(panels) {
+    for (area, (caption, y_desc, specs)) in areas.iter().zip(panels) {
         let mut curves = Vec::new();
         for (label, column, color, dashed) in specs {
             let mut points = pairs(&f, &cut(column)?);
@@ -341,8 +340,7 @@ fn forces_plot(
             "laid fraction f",
             y_desc,
             &curves,
-            legend_at,
-            |_| Ok(()),
+            |_, _| Ok(()),
         )?;
     }
     root.present().map_err(err)?;
@@ -400,33 +398,34 @@ fn bang_panel(
     let mut chart = ChartBuilder::on(area)
         .caption(
             format!("{name}: the final bang, from its release; dissipated so far, by mechanism"),
-            (FONT, 18),
+            font(DESC_PX),
         )
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
+        .margin(MARGIN_PX)
+        .x_label_area_size(X_LABEL_AREA_PX)
+        .y_label_area_size(Y_LABEL_AREA_PX)
         .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
         .map_err(err)?;
+    let ticks = LogTicks::new(
+        (x0, x1),
+        chart.plotting_area().dim_in_pixel().0,
+        X_TICK_ROOM_PX,
+    );
     chart
         .configure_mesh()
         .x_desc("time since the release (s), log scale")
         .y_desc("energy (J)")
-        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .x_label_formatter(&|v| ticks.label(v))
+        .label_style(font(TICK_PX))
+        .axis_desc_style(font(DESC_PX))
         .light_line_style(WHITE.mix(0.0))
         .draw()
         .map_err(err)?;
+    let mut drawn = Drawn::default();
     for (label, points, color, dashed) in curves {
-        draw_line(&mut chart, points, Line::curve(color, dashed), label)?;
+        let line = Line::curve(color, dashed);
+        draw_line(&mut chart, &mut drawn, points, line, label)?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::MiddleLeft)
-        .label_font((FONT, 14))
-        .draw()
-        .map_err(err)?;
-    Ok(())
+    legend(&mut chart, &drawn)
 }
 
 /// `approach.svg`: the contact-line speed against the equivalent radius over the unroll
@@ -457,13 +456,15 @@ fn approach_plot(path: &Path, run: &WrittenRun) -> anyhow::Result<()> {
         ("exact-geometry model", &exact, EXACT, true),
         ("eq. (7)", &eq7, EQ7, true),
     ];
+    let mut drawn = Drawn::default();
     for (label, pts, c, dashed) in series {
-        draw_line(&mut chart, pts.clone(), Line::curve(c, dashed), label)?;
+        let line = Line::curve(c, dashed);
+        draw_line(&mut chart, &mut drawn, pts.clone(), line, label)?;
     }
-    one_over_r(&mut chart, &eq7)?;
+    one_over_r(&mut chart, &mut drawn, &eq7)?;
     let marks = approach_marks(&run.report, &t, &r);
-    draw_marks(&mut chart, marks, &sim)?;
-    legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+    draw_marks(&mut chart, &mut drawn, marks, &sim)?;
+    legend(&mut chart, &drawn)?;
     root.present().map_err(err)?;
     Ok(())
 }
@@ -478,8 +479,13 @@ fn reference_curve(curve: &[[f64; 2]]) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Eq. (7)'s divergence, x' ~ 1/r, through its curve's point at the smallest r.
-fn one_over_r(chart: &mut LogChart<'_, '_>, eq7: &[(f64, f64)]) -> anyhow::Result<()> {
+/// Eq. (7)'s divergence, x' ~ 1/r, through its curve's point at the smallest r, booked in
+/// `drawn`.
+fn one_over_r(
+    chart: &mut LogChart<'_, '_>,
+    drawn: &mut Drawn,
+    eq7: &[(f64, f64)],
+) -> anyhow::Result<()> {
     if let (Some(&(r0, v0)), Some(&(r1, _))) = (
         eq7.iter().min_by(|a, b| a.0.total_cmp(&b.0)),
         eq7.iter().max_by(|a, b| a.0.total_cmp(&b.0)),
@@ -487,6 +493,7 @@ fn one_over_r(chart: &mut LogChart<'_, '_>, eq7: &[(f64, f64)]) -> anyhow::Resul
         let c = RGBColor(127, 127, 127);
         draw_line(
             chart,
+            drawn,
             vec![(r0, v0), (r1, v0 * r0 / r1)],
             Line::dashed(c, 1, 3, 3),
             "x' ~ 1/r (eq. 7 as r -> 0)",
@@ -518,9 +525,10 @@ fn approach_marks(report: &RunReport, t: &[f64], r: &[f64]) -> Vec<(String, f64)
     marks
 }
 
-/// The `marks` as vertical lines spanning the simulation's x' (`sim`).
+/// The `marks` as vertical lines spanning the simulation's x' (`sim`), booked in `drawn`.
 fn draw_marks(
     chart: &mut LogChart<'_, '_>,
+    drawn: &mut Drawn,
     marks: Vec<(String, f64)>,
     sim: &[(f64, f64)],
 ) -> anyhow::Result<()> {
@@ -533,7 +541,8 @@ fn draw_marks(
             continue;
         }
         let c = color(i + 3);
-        draw_line(chart, vec![(at, y0), (at, y1)], Line::solid(c, 1), label)?;
+        let line = Line::solid(c, 1);
+        draw_line(chart, drawn, vec![(at, y0), (at, y1)], line, label)?;
     }
     Ok(())
 }

@@ -8,8 +8,9 @@ use anyhow::Context as _;
 use plotters::prelude::*;
 
 use super::{
-    Area, EXACT, FONT, Line, LogChart, SIM, color, draw_line, err, legend, log_chart, log_range,
-    pairs, positive_pairs, range,
+    Area, DESC_PX, Drawn, EXACT, Line, LogChart, LogTicks, SIM, TICK_PX, X_LABEL_AREA_PX,
+    X_TICK_ROOM_PX, Y_LABEL_AREA_PX, color, draw_line, draw_markers, err, font, legend, log_chart,
+    log_range, pairs, positive_pairs, range,
 };
 use crate::study::analysis::{BANG_OBSERVABLES, BangStudy, PowerFit, Study, SweepAnalysis};
 
@@ -22,9 +23,11 @@ fn order(f: &PowerFit) -> String {
     }
 }
 
-/// Draws a fitted power law over `[h0, h1]` and names its order in the legend.
-fn fit_line<'a, DB: DrawingBackend + 'a>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>,
+/// Draws a fitted power law over `[h0, h1]` and names its order in the legend; books it in
+/// `drawn`.
+fn fit_line(
+    chart: &mut LogChart<'_, '_>,
+    drawn: &mut Drawn,
     fit: &PowerFit,
     h: &[f64],
     label: String,
@@ -39,6 +42,7 @@ fn fit_line<'a, DB: DrawingBackend + 'a>(
     }
     draw_line(
         chart,
+        drawn,
         vec![(lo, fit.eval(lo)), (hi, fit.eval(hi))],
         Line::dashed(c, 1, 6, 4),
         label,
@@ -87,6 +91,7 @@ fn pareto_plot(path: &Path, a: &SweepAnalysis, title: &str) -> anyhow::Result<()
     let mut names: Vec<&String> = idx.iter().map(|&i| &a.series[i]).collect();
     names.sort();
     names.dedup();
+    let mut drawn = Drawn::default();
     for (si, name) in names.iter().enumerate() {
         let c = color(si);
         let pts: Vec<(f64, f64)> = idx
@@ -99,11 +104,7 @@ fn pareto_plot(path: &Path, a: &SweepAnalysis, title: &str) -> anyhow::Result<()
         } else {
             (*name).clone()
         };
-        chart
-            .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))
-            .map_err(err)?
-            .label(label)
-            .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
+        draw_markers(&mut chart, &mut drawn, &pts, c.filled(), label)?;
     }
     let front: Vec<(f64, f64)> = a
         .front
@@ -111,19 +112,21 @@ fn pareto_plot(path: &Path, a: &SweepAnalysis, title: &str) -> anyhow::Result<()
         .filter(|&&i| a.err[i] > 0.0)
         .map(|&i| (a.cost[i], a.err[i]))
         .collect();
-    draw_line(&mut chart, front, Line::solid(BLACK, 1), "Pareto front")?;
+    let line = Line::solid(BLACK, 1);
+    draw_line(&mut chart, &mut drawn, front, line, "Pareto front")?;
     if let Some((e, c)) = a.target {
         let (x0, _) = log_range(idx.iter().map(|&i| a.cost[i]).chain([c]));
         let (y0, _) = log_range(idx.iter().map(|&i| a.err[i]).chain([e]));
         let grey = RGBColor(127, 127, 127);
         draw_line(
             &mut chart,
+            &mut drawn,
             vec![(x0, e), (c, e), (c, y0)],
             Line::dashed(grey, 2, 6, 4),
             format!("target: <= {:.2}% in <= {c} s", 100.0 * e),
         )?;
     }
-    legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+    legend(&mut chart, &drawn)?;
     root.present().map_err(err)?;
     Ok(())
 }
@@ -192,6 +195,7 @@ fn step_panel(
                 .flat_map(|s| s.self_err.iter().copied()),
         ),
     )?;
+    let mut drawn = Drawn::default();
     for (si, (s, (y, fit))) in studies.iter().zip(ys.iter().zip(&fits)).enumerate() {
         let c = color(si);
         let pts = positive_pairs(&s.h, y);
@@ -200,14 +204,12 @@ fn step_panel(
         } else {
             format!("{}: ", s.group)
         };
-        chart
-            .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))
-            .map_err(err)?
-            .label(format!("{group}runs"))
-            .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
+        let label = format!("{group}runs");
+        draw_markers(&mut chart, &mut drawn, &pts, c.filled(), label)?;
         if let Some(f) = fit {
             fit_line(
                 &mut chart,
+                &mut drawn,
                 f,
                 &s.h,
                 format!("{group}fit: order {} (R² {:.3})", order(f), f.r2),
@@ -215,30 +217,29 @@ fn step_panel(
             )?;
         }
         if error {
-            self_convergence(&mut chart, s, &group, c)?;
+            self_convergence(&mut chart, &mut drawn, s, &group, c)?;
         }
     }
-    legend(&mut chart, SeriesLabelPosition::LowerRight)?;
+    legend(&mut chart, &drawn)?;
     Ok(())
 }
 
 /// A study's change from its finest run against the step size (open circles), with its
-/// fit, in colour `c`; `group` prefixes the labels.
-fn self_convergence<'a, 'b: 'a>(
-    chart: &mut LogChart<'a, 'b>,
+/// fit, in colour `c`; `group` prefixes the labels; booked in `drawn`.
+fn self_convergence(
+    chart: &mut LogChart<'_, '_>,
+    drawn: &mut Drawn,
     s: &Study,
     group: &str,
     c: RGBColor,
 ) -> anyhow::Result<()> {
     let pts = positive_pairs(&s.h, &s.self_err);
-    chart
-        .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.stroke_width(1))))
-        .map_err(err)?
-        .label(format!("{group}change from the finest run"))
-        .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.stroke_width(1)));
+    let label = format!("{group}change from the finest run");
+    draw_markers(chart, drawn, &pts, c.stroke_width(1), label)?;
     if let Some(f) = &s.self_fit {
         fit_line(
             chart,
+            drawn,
             f,
             &s.h,
             format!(
@@ -265,21 +266,20 @@ fn cost_panel(panel: &Area<'_>, studies: &[&Study], title: &str) -> anyhow::Resu
             .iter()
             .flat_map(|s| s.wall_per_step_s.iter().copied()),
     )?;
+    let mut drawn = Drawn::default();
     for (si, s) in studies.iter().enumerate() {
         let c = color(si);
         let pts = pairs(&s.links, &s.wall_per_step_s);
-        chart
-            .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))
-            .map_err(err)?
-            .label(if s.group.is_empty() || studies.len() == 1 {
-                "runs".to_owned()
-            } else {
-                s.group.clone()
-            })
-            .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
+        let label = if s.group.is_empty() || studies.len() == 1 {
+            "runs".to_owned()
+        } else {
+            s.group.clone()
+        };
+        draw_markers(&mut chart, &mut drawn, &pts, c.filled(), label)?;
         if let Some(f) = &s.cost_fit {
             fit_line(
                 &mut chart,
+                &mut drawn,
                 f,
                 &s.links,
                 format!("slope {} (R² {:.3})", order(f), f.r2),
@@ -287,7 +287,7 @@ fn cost_panel(panel: &Area<'_>, studies: &[&Study], title: &str) -> anyhow::Resu
             )?;
         }
     }
-    legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+    legend(&mut chart, &drawn)?;
     Ok(())
 }
 
@@ -327,7 +327,7 @@ fn bang_study_plot(path: &Path, b: &BangStudy, title: &str) -> anyhow::Result<()
             }
         ),
         (20, 12),
-        (FONT, 18),
+        font(DESC_PX),
     ))
     .map_err(err)?;
     let panels = body.split_evenly((5, 2));
@@ -338,16 +338,25 @@ fn bang_study_plot(path: &Path, b: &BangStudy, title: &str) -> anyhow::Result<()
         let hi = m.iter().zip(se).map(|(m, s)| m + s.max(0.0));
         let (y0, y1) = range(lo.chain(hi));
         let mut chart = ChartBuilder::on(panel)
-            .caption(BANG_OBSERVABLES[k].0, (FONT, 15))
+            .caption(BANG_OBSERVABLES[k].0, font(DESC_PX))
             .margin(8)
-            .x_label_area_size(30)
-            .y_label_area_size(70)
+            .x_label_area_size(X_LABEL_AREA_PX)
+            .y_label_area_size(Y_LABEL_AREA_PX)
             .build_cartesian_2d((h0..h1).log_scale(), y0..y1)
             .map_err(err)?;
+        let ticks = LogTicks::new(
+            (h0, h1),
+            chart.plotting_area().dim_in_pixel().0,
+            X_TICK_ROOM_PX,
+        );
         chart
             .configure_mesh()
             .x_desc(format!("h of {}", b.key))
-            .x_label_formatter(&|v| format!("{v:.0e}"))
+            // A panel is some 160 px high: six labels leave room between them.
+            .y_labels(6)
+            .x_label_formatter(&|v| ticks.label(v))
+            .label_style(font(TICK_PX))
+            .axis_desc_style(font(DESC_PX))
             .light_line_style(WHITE.mix(0.0))
             .draw()
             .map_err(err)?;
