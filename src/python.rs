@@ -14,9 +14,13 @@ use pyo3::types::PyBytes;
 
 use crate::output::fields::fields;
 use crate::output::files::{RunFiles, View};
+use crate::output::folded::{chain_report_json, write_chain_run};
+use crate::output::folder::{RunFolder, run_id};
+use crate::run::folded::run_chain;
 use crate::run::{Observer, RunReport, Sample, run_until};
-use crate::scene::Scene;
-use crate::scene::overrides::{Override, scene_file_with_overrides};
+use crate::scene::folded::FoldedChain;
+use crate::scene::overrides::{Override, any_scene_file_with_overrides};
+use crate::scene::{AnyScene, Scene, shipped};
 
 // Raised as `uncoil.SceneError`: the package re-exports it, and a traceback names it so.
 pyo3::create_exception!(
@@ -26,10 +30,23 @@ pyo3::create_exception!(
     "A scene file or an override that is not valid: the command line's `key = value: rule`."
 );
 
-/// A validated scene.
+/// A validated scene, of either kind: a coil's or a folded chain's.
 #[pyclass(frozen, name = "Scene", module = "uncoil._uncoil")]
 struct PyScene {
-    inner: Scene,
+    inner: AnyScene,
+}
+
+impl PyScene {
+    /// The coil's scene, or a `SceneError` saying that `what` takes one.
+    fn coil(&self, what: &str) -> PyResult<&Scene> {
+        match &self.inner {
+            AnyScene::Coil(scene) => Ok(scene),
+            AnyScene::FoldedChain(chain) => Err(SceneError::new_err(format!(
+                "{}: a folded chain's scene; {what} takes a coil's",
+                chain.name
+            ))),
+        }
+    }
 }
 
 #[pymethods]
@@ -37,27 +54,47 @@ impl PyScene {
     /// The scene's name.
     #[getter]
     fn name(&self) -> &str {
-        &self.inner.name
+        match &self.inner {
+            AnyScene::Coil(scene) => &scene.name,
+            AnyScene::FoldedChain(chain) => &chain.name,
+        }
+    }
+
+    /// The scene's kind: `coil` or `folded-chain`.
+    #[getter]
+    fn kind(&self) -> &'static str {
+        match &self.inner {
+            AnyScene::Coil(_) => "coil",
+            AnyScene::FoldedChain(_) => crate::scene::folded::KIND,
+        }
     }
 
     /// The scene file's text, with one `# override:` line per override.
     #[getter]
     fn source_text(&self) -> &str {
-        &self.inner.source_text
+        match &self.inner {
+            AnyScene::Coil(scene) => &scene.source_text,
+            AnyScene::FoldedChain(chain) => &chain.source_text,
+        }
     }
 
     /// Every value of the scene, defaults filled in, as JSON.
     fn to_json(&self) -> PyResult<String> {
-        serde_json::to_string(&self.inner).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+        match &self.inner {
+            AnyScene::Coil(scene) => serde_json::to_string(scene),
+            AnyScene::FoldedChain(chain) => serde_json::to_string(chain),
+        }
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))
     }
 
     fn __repr__(&self) -> String {
-        format!("Scene({:?})", self.inner.name)
+        format!("Scene({:?})", self.name())
     }
 }
 
-/// Reads the scene file at `path` and applies `overrides`, each `(key, value)` with the
-/// value in TOML (`("solver.max_dt_s", "0.0005")`), as `uncoil run --set` does.
+/// Reads the scene file at `path` (or the shipped scene of that name) and applies
+/// `overrides`, each `(key, value)` with the value in TOML (`("solver.max_dt_s",
+/// "0.0005")`), as `uncoil run --set` does. Either kind of scene.
 #[pyfunction]
 #[pyo3(signature = (path, overrides = Vec::new()))]
 fn load_scene(path: PathBuf, overrides: Vec<(String, String)>) -> PyResult<PyScene> {
@@ -66,21 +103,19 @@ fn load_scene(path: PathBuf, overrides: Vec<(String, String)>) -> PyResult<PySce
         .map(|(k, v)| format!("{k}={v}").parse::<Override>())
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| SceneError::new_err(e.to_string()))?;
-    scene_file_with_overrides(&path, &overrides)
+    any_scene_file_with_overrides(&path, &overrides)
         .map(|inner| PyScene { inner })
         .map_err(|e| SceneError::new_err(e.to_string()))
 }
 
-/// The names of the shipped scenes `load_scene` and `run` take instead of a path (the coil
-/// scenes; the folded chain is the command line's).
+/// Every shipped scene `load_scene` and `run` take instead of a path, with its kind (`coil`
+/// or `folded-chain`): the scenes, then the hard cases (`hard/...`).
 #[pyfunction]
-fn scenes() -> Vec<&'static str> {
-    crate::scene::shipped::names()
+fn scenes() -> Vec<(&'static str, &'static str)> {
+    shipped::names()
         .into_iter()
-        .filter(|name| {
-            crate::scene::shipped::text(name)
-                .is_some_and(|text| Scene::from_toml_str(text, name).is_ok())
-        })
+        .chain(shipped::hard_names())
+        .map(|name| (name, shipped::kind(shipped::text(name).unwrap_or_default())))
         .collect()
 }
 
@@ -91,12 +126,9 @@ struct Columns {
     values: Vec<Vec<f64>>,
 }
 
-impl Observer for Columns {
-    fn observe_init(&mut self, _scene: &Scene) -> anyhow::Result<()> {
-        Ok(())
-    }
-
-    fn observe_sample(&mut self, sample: &Sample) -> anyhow::Result<()> {
+impl Columns {
+    /// Adds a row: a sample's fields, in order (a coil's `Sample` or a chain's).
+    fn push(&mut self, sample: &impl serde::Serialize) -> anyhow::Result<()> {
         let row = fields(sample)?;
         if self.names.is_empty() {
             self.names = row.iter().map(|(name, _)| *name).collect();
@@ -106,6 +138,16 @@ impl Observer for Columns {
             column.push(value);
         }
         Ok(())
+    }
+}
+
+impl Observer for Columns {
+    fn observe_init(&mut self, _scene: &Scene) -> anyhow::Result<()> {
+        Ok(())
+    }
+
+    fn observe_sample(&mut self, sample: &Sample) -> anyhow::Result<()> {
+        self.push(sample)
     }
 
     fn observe_final(&mut self, _report: &RunReport) -> anyhow::Result<()> {
@@ -132,11 +174,32 @@ fn run_scene(
     Ok((columns, report))
 }
 
+/// Runs the folded chain `chain`, into `out` if given (its `samples.csv` and
+/// `report.json`); returns its samples by column and its report as `report.json` has it.
+fn run_folded(
+    chain: &FoldedChain,
+    out: Option<&PathBuf>,
+    stop: &AtomicBool,
+) -> anyhow::Result<(Columns, String)> {
+    let mut columns = Columns::default();
+    let mut each = |s: &crate::run::folded::ChainSample| columns.push(s);
+    let report = match out {
+        None => run_chain(chain, &mut each, stop)?,
+        Some(dir) => {
+            let id = run_id(&chain.name, &chain.source_text);
+            let folder = RunFolder::take(dir, &id, &chain.name)?;
+            write_chain_run(chain, &folder, &mut each, stop)?
+        }
+    };
+    Ok((columns, chain_report_json(chain, &report)?))
+}
+
 /// A sample column's name and its values as little-endian `float64` bytes.
 type NamedBytes = (String, Py<PyBytes>);
 
-/// Runs `scene` without the GIL: returns the sample columns as `(name, float64 bytes)` pairs
-/// and the report as JSON. Files are written only into `out`, `run.mcap` only with `mcap`.
+/// Runs `scene` (a coil's or a folded chain's) without the GIL: returns the sample columns
+/// as `(name, float64 bytes)` pairs and the report as JSON, as `report.json` has it. Files
+/// are written only into `out`, `run.mcap` only with `mcap` (a coil's).
 /// Ctrl-C stops the run with its files finished and raises `KeyboardInterrupt`.
 #[pyfunction]
 #[pyo3(signature = (scene, out = None, mcap = false))]
@@ -152,11 +215,23 @@ fn run(
         ));
     }
     let stop = AtomicBool::new(false);
-    let (columns, report) = without_gil(py, &stop, || {
-        run_scene(&scene.inner, out.as_ref(), mcap, &stop)
-    })?;
-    let report =
-        serde_json::to_string(&report).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let (columns, report) = match &scene.inner {
+        AnyScene::Coil(coil) => {
+            let (columns, report) =
+                without_gil(py, &stop, || run_scene(coil, out.as_ref(), mcap, &stop))?;
+            let report = serde_json::to_string(&report)
+                .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+            (columns, report)
+        }
+        AnyScene::FoldedChain(chain) => {
+            if mcap {
+                return Err(PyValueError::new_err(
+                    "mcap=True: a folded chain writes no run.mcap",
+                ));
+            }
+            without_gil(py, &stop, || run_folded(chain, out.as_ref(), &stop))?
+        }
+    };
     let columns = columns
         .names
         .iter()
@@ -181,8 +256,9 @@ fn run(
 #[pyfunction]
 fn theory(scene: &PyScene, quantity: &str, at: Vec<f64>) -> PyResult<Vec<f64>> {
     use crate::theory::{References, continuum::continuum_time_from_rest, params};
-    let refs = References::new(&scene.inner);
-    let p = params(&scene.inner);
+    let coil = scene.coil("theory")?;
+    let refs = References::new(coil);
+    let p = params(coil);
     let value = |x: f64| -> PyResult<f64> {
         Ok(match quantity {
             "eq7_time_at_radius" => refs.continuum.time_at_radius(x).unwrap_or(f64::NAN),
@@ -251,7 +327,8 @@ fn sweep(
         .map(|(key, values)| format!("{key}={}", values.join(",")).parse::<Vary>())
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| SceneError::new_err(e.to_string()))?;
-    let grid = Sweep::new(&scene.inner.source_text, &scene.inner.name, &varies)
+    let coil = scene.coil("sweep")?;
+    let grid = Sweep::new(&coil.source_text, &coil.name, &varies)
         .map_err(|e| SceneError::new_err(e.to_string()))?;
     let (dir, temporary) = match out {
         Some(dir) => (dir, false),
@@ -270,11 +347,7 @@ fn sweep(
     if temporary {
         let _ = std::fs::remove_dir_all(&dir);
     }
-    let mut table = result?;
-    // Rows are written as runs end; give them in the grid's order.
-    table
-        .rows
-        .sort_by_key(|row| row.first().and_then(|i| i.parse::<usize>().ok()));
+    let table = result?;
     Ok((table.header, table.rows))
 }
 

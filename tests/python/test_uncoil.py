@@ -228,3 +228,40 @@ def test_ctrl_c_stops_a_sweep(tmp_path):
     assert elapsed < 10, f"stopped after {elapsed:.1f} s"
     rows = list(csv.DictReader(open(tmp_path / "sweep.csv", newline="")))
     assert [r["status"] for r in rows] == ["interrupted"]
+
+
+def test_every_shipped_scene_is_listed_with_its_kind():
+    scenes = uncoil.scenes()
+    assert list(scenes)[:2] == ["yoga-mat", "thin-tape"]
+    assert scenes["folded-chain"] == "folded-chain"
+    assert scenes["yoga-mat"] == "coil" and scenes["hard/thin-300"] == "coil"
+    for name, kind in scenes.items():
+        try:
+            assert uncoil.load_scene(name).kind == kind, name
+        except uncoil.SceneError:
+            # The hard case made to be refused: one link per turn is longer than R.
+            assert name == "hard/one-link-per-turn"
+
+
+def test_the_folded_chain_runs_by_name_and_gives_what_its_files_hold(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    small = {"chain.links": 40}
+    result = uncoil.run("folded-chain", overrides=small, out="chain")
+    assert result.kind == "folded-chain"
+    assert result.stop_reason == "tip-fraction"
+    with open(tmp_path / "chain" / "samples.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert list(result.samples) == list(rows[0])
+    for name, values in result.samples.items():
+        written = np.array([float(r[name]) if r[name] else math.nan for r in rows])
+        np.testing.assert_array_equal(values, written, err_msg=name)
+    on_disk = json.loads((tmp_path / "chain" / "report.json").read_text())
+    assert on_disk["report"] == result.report["report"]
+    assert result.milestones == on_disk["report"]["crossings"] and result.milestones
+    assert set(result.ledger) >= {"floor_normal_j", "joints_j"}
+    # Without `out`, the same run and nothing written.
+    again = uncoil.run(uncoil.load_scene("folded-chain", small))
+    assert again.report["report"]["crossings"] == result.milestones
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["chain"]
+    with pytest.raises(uncoil.SceneError, match="a folded chain's scene; sweep takes a coil's"):
+        uncoil.sweep("folded-chain", {"chain.links": [20, 40]})

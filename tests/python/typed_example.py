@@ -16,8 +16,12 @@ def laid_fraction_at_the_end(name: str) -> float:
     return float(samples["laid_fraction"][-1])
 
 
-def shipped() -> List[str]:
+def shipped() -> Dict[str, str]:
     return uncoil.scenes()
+
+
+def kinds() -> List[str]:
+    return [uncoil.load_scene(name).kind for name in ("yoga-mat", "folded-chain")]
 
 
 def eq7_times(name: str) -> List[float]:
@@ -36,4 +40,4 @@ def bad_override() -> str:
 
 
 if __name__ == "__main__":
-    print(shipped(), laid_fraction_at_the_end("yoga-mat"), eq7_times("yoga-mat"), bad_override())
+    print(shipped(), kinds(), laid_fraction_at_the_end("yoga-mat"), eq7_times("yoga-mat"), bad_override())

@@ -4,7 +4,8 @@
     result = uncoil.run("yoga-mat", overrides={"push.contact_speed_m_s": 0.4})
     print(result.stop_reason, result.samples["r_m"][-1])
 
-A scene is a shipped scene's name (`uncoil.scenes()` lists them) or the path of a scene file.
+A scene is a shipped scene's name (`uncoil.scenes()` lists them, with their kinds) or the
+path of a scene file, of either kind: a coil's, or the folded chain's (`"folded-chain"`).
 
 The simulation is the Rust crate's (the extension module `uncoil._uncoil`); this layer only
 turns what it returns into numpy arrays and dicts. A run writes files only when `out` is
@@ -57,15 +58,18 @@ def _toml_value(value: Any) -> str:
     raise TypeError(f"an override must be a number, a bool or a string, not {type(value).__name__}")
 
 
-def scenes() -> List[str]:
-    """The names of the shipped scenes, which `load_scene` and `run` take in place of a path."""
-    return list(_uncoil.scenes())
+def scenes() -> Dict[str, str]:
+    """Every shipped scene, which `load_scene`, `run` and `sweep` take in place of a path, by
+    name with its kind (`"coil"` or `"folded-chain"`): the scenes, then the hard cases
+    (`"hard/thin-300"`, ...). The same list as `uncoil scenes` prints."""
+    return dict(_uncoil.scenes())
 
 
 def load_scene(path: PathLikeStr, overrides: Optional[Mapping[str, Any]] = None) -> Scene:
-    """The scene in the TOML file at `path` (or the shipped scene of that name, when no such
-    file exists), with `overrides` ({"solver.max_dt_s": 5e-4}) applied as `uncoil run --set`
-    applies them.
+    """The scene in the TOML file at `path`, or the shipped scene of that name when no such
+    file exists (`"yoga-mat"`, `"folded-chain"`: `scenes()` lists them), with `overrides`
+    ({"solver.max_dt_s": 5e-4}) applied as `uncoil run --set` applies them. Either kind:
+    `Scene.kind` says which.
 
     Raises `SceneError` with the command line's message when the scene is not valid.
     """
@@ -74,7 +78,11 @@ def load_scene(path: PathLikeStr, overrides: Optional[Mapping[str, Any]] = None)
 
 
 class RunResult:
-    """What a run gives: its samples by column, its report, and the report's main parts."""
+    """What a run gives: its samples by column, its report, and the report's main parts.
+
+    A folded chain's run (`kind == "folded-chain"`) has the chain's columns and report, as
+    `uncoil run folded-chain` writes them: its report's own part is `report["report"]`.
+    """
 
     samples: Dict[str, np.ndarray]
     """Every column of `samples.csv`, as float64 arrays (NaN where the CSV cell is empty)."""
@@ -86,18 +94,31 @@ class RunResult:
         self.report = report
 
     @property
+    def kind(self) -> str:
+        """The scene's kind: `coil` or `folded-chain`."""
+        return "folded-chain" if self.report.get("kind") == "folded-chain" else "coil"
+
+    @property
     def stop_reason(self) -> str:
-        """Why the run stopped: `at-rest`, `bang-cap`, `max-time`, `interrupted`, or a guard."""
+        """Why the run stopped: for a coil `at-rest`, `bang-cap`, `max-time`, `interrupted`, or
+        a guard; for a folded chain `tip-fraction`, `rest`, `max-time`, `interrupted`, ..."""
+        if self.kind == "folded-chain":
+            return str(self.report["report"]["end"])
         return str(self.report["stop"]["reason"])
 
     @property
     def ledger(self) -> Dict[str, Any]:
-        """The energy ledger (J): where the energy went."""
+        """The energy ledger (J): where the energy went (a folded chain's: by mechanism)."""
+        if self.kind == "folded-chain":
+            return dict(self.report["report"]["ledger"])
         return dict(self.report["ledger"])
 
     @property
     def milestones(self) -> List[Dict[str, Any]]:
-        """The coil's milestones: radii reached, with the simulation's and the references' times."""
+        """A coil's milestones: radii reached, with the simulation's and the references' times;
+        a folded chain's: the tip's crossings of x/L = 0.25-0.95 beside the closed form's."""
+        if self.kind == "folded-chain":
+            return list(self.report["report"]["crossings"])
         return list(self.report["milestones"])
 
     def to_pandas(self) -> Any:
@@ -117,10 +138,11 @@ def run(
     out: Optional[PathLikeStr] = None,
     mcap: bool = False,
 ) -> RunResult:
-    """Runs a scene (a `Scene`, or the path of a scene file with `overrides`).
+    """Runs a scene: a `Scene`, or a scene file's path or a shipped scene's name (`"yoga-mat"`,
+    `"folded-chain"`) with `overrides`.
 
-    Files (`samples.csv`, `report.json`, and `run.mcap` with `mcap=True`) are written only
-    into `out`.
+    Files (`samples.csv`, `report.json`, and for a coil `run.mcap` with `mcap=True`) are
+    written only into `out`.
     """
     if isinstance(scene_or_path, Scene):
         if overrides:
@@ -147,7 +169,7 @@ def sweep(
     jobs: Optional[int] = None,
     out: Optional[PathLikeStr] = None,
 ) -> Dict[str, Union[np.ndarray, List[str]]]:
-    """Runs `scene` over the product grid of `vary` ({"discretisation.links_per_turn": [16, 32]},
+    """Runs `scene` (a coil's `Scene`, path or shipped name) over the product grid of `vary` ({"discretisation.links_per_turn": [16, 32]},
     the last key varying fastest), `jobs` runs at once (default one per core), as
     `uncoil sweep` does, and gives `sweep.csv` by column: numbers as float64 arrays, the
     status as text. Files are written only into `out`.
