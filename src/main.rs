@@ -25,7 +25,6 @@ use uncoil::output::folded::{chain_summary, write_chain_run};
 use uncoil::output::folder::{RunFolder, run_id};
 use uncoil::output::summary;
 use uncoil::output::view::ViewObserver;
-use uncoil::run::folded::ChainEnd;
 use uncoil::run::run;
 use uncoil::run::stop::{Status, StopReason};
 use uncoil::scene::folded::FoldedChain;
@@ -278,11 +277,7 @@ fn run_chain_command(
     let report = write_chain_run(chain, &folder, &mut |_| Ok(()), &stop)?;
     print!("{}", chain_summary(chain, &report));
     println!("Wrote {0}/samples.csv and {0}/report.json", dir.display());
-    Ok(match report.end {
-        ChainEnd::Interrupted => Exit::Interrupted,
-        ChainEnd::NotFinite | ChainEnd::Unsolved => Exit::Stopped,
-        _ => Exit::Ok,
-    })
+    Ok(Exit::of_chain(report.end))
 }
 
 /// The flag a stopping signal raises (SIGINT, SIGTERM, SIGHUP: `uncoil::run::signals`): the

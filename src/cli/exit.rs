@@ -4,12 +4,13 @@
 use std::process::ExitCode;
 
 use uncoil::output::folder::FolderError;
+use uncoil::run::folded::ChainEnd;
 use uncoil::run::signals::{self, Signal};
 use uncoil::run::stop::Status;
 use uncoil::scene::SceneError;
 use uncoil::scene::overrides::OverrideSyntaxError;
 use uncoil::study::check::salvage::SalvageError;
-use uncoil::study::sweep::{CombinationError, NotOneSweep};
+use uncoil::study::sweep::{CombinationError, NotOneSweep, SweepOutcome};
 
 use crate::cli::paths::PathError;
 
@@ -41,6 +42,30 @@ impl Exit {
             Status::Completed => Self::Ok,
             Status::Interrupted => Self::Interrupted,
             Status::Stopped => Self::Stopped,
+        }
+    }
+
+    /// The exit of a folded chain's run that ended with `end`: a solve that failed or a
+    /// non-finite state is a stop, as a guard's is.
+    pub fn of_chain(end: ChainEnd) -> Self {
+        match end {
+            ChainEnd::Interrupted => Self::Interrupted,
+            ChainEnd::NotFinite | ChainEnd::Unsolved => Self::Stopped,
+            ChainEnd::TipFraction | ChainEnd::Rest | ChainEnd::MaxTime => Self::Ok,
+        }
+    }
+
+    /// The exit of a sweep whose runs ended as `o` says: a signal first, then a failed run,
+    /// then a run a guard stopped.
+    pub fn of_sweep(o: &SweepOutcome) -> Self {
+        if signals::received().is_some() {
+            Self::Interrupted
+        } else if o.failed > 0 {
+            Self::Failed
+        } else if o.stopped > 0 {
+            Self::Stopped
+        } else {
+            Self::Ok
         }
     }
 

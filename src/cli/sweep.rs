@@ -251,27 +251,22 @@ fn ended(o: &SweepOutcome, all: bool) -> Exit {
             "interrupted by {signal}: the runs it stopped are rows marked interrupted; \
              the same command with --resume runs them and the rest"
         );
-        return Exit::Interrupted;
-    }
-    let dir = folder_of(&o.path);
-    if all {
-        println!(
-            "draw its report with: uncoil sweep-report {}",
-            dir.display()
-        );
     } else {
-        println!(
-            "once every shard has run, join them with: uncoil sweep --merge {}/sweep.*-of-*.csv",
-            dir.display()
-        );
+        let dir = folder_of(&o.path);
+        if all {
+            println!(
+                "draw its report with: uncoil sweep-report {}",
+                dir.display()
+            );
+        } else {
+            println!(
+                "once every shard has run, join them with: uncoil sweep --merge \
+                 {}/sweep.*-of-*.csv",
+                dir.display()
+            );
+        }
     }
-    if o.failed > 0 {
-        Exit::Failed
-    } else if o.stopped > 0 {
-        Exit::Stopped
-    } else {
-        Exit::Ok
-    }
+    Exit::of_sweep(o)
 }
 
 /// `uncoil sweep-report`: 0 written, 1 a file could not be read or written, 2 a path that
