@@ -6,7 +6,7 @@
 //!
 //! This file holds what both kinds of picture share (ranges, colours, text sizes, the line
 //! chart, the log-log chart, and the legend, placed where it hides least of what is drawn:
-//! [`legend_spot`]); a run's pictures are in `run`, a sweep's in `sweep`.
+//! `legend_spot`); a run's pictures are in `run`, a sweep's in `sweep`.
 
 mod run;
 mod sweep;
