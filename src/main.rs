@@ -67,7 +67,8 @@ enum Command {
         no_mcap: bool,
         /// Serve the run live to Foxglove (WebSocket) at ADDR while it goes [default ADDR:
         /// 127.0.0.1:8765].
-        #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = LIVE_ADDR)]
+        #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = LIVE_ADDR,
+              value_parser = parse_live)]
         live: Option<std::net::SocketAddr>,
         /// With --live: hold simulated time to X times real time (0.1: ten times slower).
         #[arg(long, value_name = "X", requires = "live", value_parser = parse_pace)]
@@ -183,7 +184,8 @@ fn split_value(args: &[OsString]) -> Option<String> {
         let split = matches!(flag, "--set" | "--vary")
             && !key.contains('=')
             && !key.starts_with('-')
-            && !value.starts_with('-')
+            && (!value.starts_with('-')
+                || value.split(',').all(|v| v.trim().parse::<f64>().is_ok()))
             && shipped::text(value).is_none()
             && !Path::new(value).exists();
         split.then(|| {
@@ -435,6 +437,16 @@ struct View {
 const LIVE_ADDR: &str = uncoil::output::view::live::DEFAULT_ADDR;
 #[cfg(not(feature = "live"))]
 const LIVE_ADDR: &str = "127.0.0.1:8765";
+
+fn parse_live(text: &str) -> Result<std::net::SocketAddr, String> {
+    use std::net::ToSocketAddrs as _;
+    text.to_socket_addrs()
+        .ok()
+        .and_then(|mut addrs| addrs.next())
+        .ok_or_else(|| {
+            format!("`{text}`: an address to serve at, IP:PORT or HOST:PORT, e.g. 127.0.0.1:8765")
+        })
+}
 
 fn parse_pace(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {

@@ -31,7 +31,8 @@ pub use file::SCENE_KEYS;
 pub enum SceneError {
     /// The scene file could not be read.
     #[error(
-        "cannot read scene file {}: {source} (a shipped scene can be named instead: {})",
+        "cannot read scene file {}: {source} (a shipped scene can be named instead: {}; \
+         `uncoil scenes` lists them all, the hard cases too)",
         path.display(),
         shipped::names().join(", ")
     )]
@@ -269,7 +270,8 @@ pub enum AnyScene {
 }
 
 /// The text of the scene file at `path` and its stem, the scene's default name; when no
-/// such file exists and `path` is a shipped scene's name (`yoga-mat`), that scene's.
+/// such file exists (or a folder is of that name) and `path` is a shipped scene's name
+/// (`yoga-mat`), that scene's.
 pub fn read_scene_file(path: &Path) -> Result<(String, String), SceneError> {
     let stem = path
         .file_stem()
@@ -278,7 +280,8 @@ pub fn read_scene_file(path: &Path) -> Result<(String, String), SceneError> {
     match std::fs::read_to_string(path) {
         Ok(text) => Ok((text, stem)),
         Err(source) => match path.to_str().and_then(shipped::text) {
-            Some(text) if source.kind() == std::io::ErrorKind::NotFound => {
+            // No such file, or a folder of that name: the name is the shipped scene's.
+            Some(text) if source.kind() == std::io::ErrorKind::NotFound || path.is_dir() => {
                 Ok((text.to_owned(), stem))
             }
             _ => Err(SceneError::Read {

@@ -83,6 +83,32 @@ const CASES: &[Case] = &[
         "expected a coil's scene",
     ),
     (&["check", "notes.txt"], "notes", "cannot parse scene"),
+    // A value that is not of its key's kind, or a name that is a path.
+    (
+        &["run", "yoga-mat", "--set", "discretisation=12"],
+        "discretisation=12",
+        "expected a section",
+    ),
+    (
+        &["run", "yoga-mat", "--set", "name=../esc"],
+        "../esc",
+        "must be a plain name, not a path",
+    ),
+    (
+        &["sweep", "yoga-mat", "--vary", "tape.mass_kg=1,1.0"],
+        "tape.mass_kg",
+        "given twice",
+    ),
+    (
+        &["sweep", "yoga-mat", "--jobs", "0"],
+        "`0`",
+        "a whole number >= 1",
+    ),
+    (
+        &["run", "yoga-mat", "--live", "nowhere"],
+        "nowhere",
+        "IP:PORT or HOST:PORT",
+    ),
     // An output folder that is a file, or inside one.
     (
         &["run", "yoga-mat", "--out", "notes.txt"],
@@ -164,6 +190,11 @@ const CASES: &[Case] = &[
         "folder",
         "a folder; expected a sweep's shard file",
     ),
+    (
+        &["sweep", "--merge", "table.csv"],
+        "table.csv",
+        "not a sweep's",
+    ),
     // A folder to check or salvage: missing, a file, a folder of neither.
     (
         &["check", "missing"],
@@ -224,6 +255,9 @@ fn a_value_given_as_a_separate_word_gets_the_key_value_hint() {
             "{stderr}"
         );
     }
+    let (code, stderr) = place.run(&["run", "yoga-mat", "--set", "floor.friction", "-1"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("--set floor.friction=-1"), "{stderr}");
     let (code, stderr) = place.run(&[
         "run",
         "yoga-mat",
@@ -247,6 +281,8 @@ fn shipped_names_work_in_every_command_outside_the_repository() {
         let (code, stderr) = place.run(args);
         assert_eq!(code, Some(0), "uncoil {}: {stderr}", args.join(" "));
     };
+    // A folder of a shipped scene's name does not hide the scene.
+    std::fs::create_dir(at.join("folded-chain")).unwrap();
     ok(&[
         "run",
         "folded-chain",

@@ -108,8 +108,26 @@ pub struct Usage(pub String);
 /// ([`Exit::of_error`]).
 pub fn fail(error: impl Into<anyhow::Error>) -> ExitCode {
     let error = error.into();
-    eprintln!("error: {error:#}");
+    eprintln!("error: {}", said(&error));
     Exit::of_error(&error).into()
+}
+
+/// `error` and its causes, joined by `: `, each cause said once: a cause whose text its
+/// error's message already holds (`cannot read scene file x: No such file ...`) is not
+/// repeated.
+fn said(error: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in error.chain() {
+        let part = cause.to_string();
+        if text.contains(&part) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&part);
+    }
+    text
 }
 
 impl From<Exit> for ExitCode {

@@ -149,12 +149,20 @@ pub fn sweep_file(path: &Path) -> Result<PathBuf, PathError> {
         file(path, expected)?;
         path.to_owned()
     };
+    sweep_csv(&file, expected)?;
+    Ok(file)
+}
+
+/// `path` is a file that starts as a sweep's does, with its index column; `expected` says
+/// what it should be.
+pub fn sweep_csv(path: &Path, expected: &str) -> Result<(), PathError> {
+    file(path, expected)?;
     let header = format!("{INDEX_COLUMN},");
-    if starts_with(&file, header.as_bytes()) {
-        Ok(file)
+    if starts_with(path, header.as_bytes()) {
+        Ok(())
     } else {
         Err(PathError::new(
-            &file,
+            path,
             format!("a file that is not a sweep's (its first column is not `{INDEX_COLUMN}`)"),
             expected,
         ))

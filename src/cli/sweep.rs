@@ -35,7 +35,7 @@ pub struct SweepArgs {
     shard: Option<Shard>,
     /// Runs at once (default: one per core). Wall times are per run, so runs sharing the
     /// cores slow each other down: use --jobs 1 for timings.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_jobs)]
     jobs: Option<usize>,
     /// Output folder (default: sweeps/<scene name>; with --merge, the first file's folder).
     #[arg(long)]
@@ -110,6 +110,22 @@ pub struct ReportArgs {
     no_convergence: bool,
 }
 
+/// Whether two values of a key are one: equal, or the same number (`1` and `1.0`).
+fn same(a: &toml::Value, b: &toml::Value) -> bool {
+    let number = |v: &toml::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+    match (number(a), number(b)) {
+        (Some(x), Some(y)) => x == y,
+        _ => a == b,
+    }
+}
+
+fn parse_jobs(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!("`{s}`: runs at once, a whole number >= 1")),
+    }
+}
+
 fn parse_target(s: &str) -> Result<(f64, f64), String> {
     let bad = || format!("`{s}`: expected ERROR,WALL_S with both > 0, e.g. 0.003,0.3");
     let (e, w) = s.split_once(',').ok_or_else(bad)?;
@@ -133,7 +149,7 @@ fn folder_of(p: &Path) -> PathBuf {
 /// path that is not a sweep file, files that are not of one sweep.
 fn merge_command(files: &[PathBuf], dir: &Path, allow_partial: bool) -> anyhow::Result<Exit> {
     for file in files {
-        paths::file(
+        paths::sweep_csv(
             file,
             "a sweep's shard file, e.g. sweeps/big/sweep.1-of-8.csv",
         )?;
@@ -200,6 +216,21 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<Exit> {
             twice.1.key
         ))
         .into());
+    }
+    // A value given twice would be two runs of one combination, which no merge takes.
+    for v in &args.vary {
+        if let Some((_, twice)) = v
+            .values
+            .iter()
+            .enumerate()
+            .find(|(k, x)| v.values[..*k].iter().any(|y| same(&y.value, &x.value)))
+        {
+            return Err(Usage(format!(
+                "--vary {}: the value {} is given twice",
+                v.key, twice.raw
+            ))
+            .into());
+        }
     }
     let sweep = Sweep::new(&text, &stem, &args.vary)?;
     let dir = args
@@ -292,11 +323,18 @@ fn write_report(args: &ReportArgs, sweep: &Path) -> anyhow::Result<String> {
     };
     let dir = args.out.clone().unwrap_or_else(|| folder_of(sweep));
     let title = args.title.clone().unwrap_or_else(|| {
-        std::fs::canonicalize(&dir)
+        std::fs::canonicalize(folder_of(sweep))
             .ok()
             .and_then(|d| d.file_name().map(|n| n.to_string_lossy().into_owned()))
             .unwrap_or_else(|| "sweep".into())
     });
+    let varied = table.varied_keys();
+    if let Some(k) = args.repeat_key.iter().find(|k| !varied.contains(k)) {
+        anyhow::bail!(Usage(format!(
+            "--repeat-key {k}: not a varied key of this sweep (varied: {})",
+            varied.join(", ")
+        )));
+    }
     let mut analysis = SweepAnalysis::new(table, reference, cost, &args.repeat_key)?;
     analysis.target = args.target;
     if args.no_convergence {

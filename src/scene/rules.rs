@@ -49,6 +49,17 @@ pub(crate) fn plain_types(message: &str) -> String {
     for (rust, words) in WORDS {
         plain = plain.replace(rust, words);
     }
+    // `expected struct TapeFile`: a section, whose keys are set one by one.
+    while let Some(at) = plain.find("expected struct ") {
+        let rest = &plain[at + "expected struct ".len()..];
+        let end = rest
+            .find(|c: char| !c.is_alphanumeric() && c != '_')
+            .unwrap_or(rest.len());
+        let tail = rest[end..].to_owned();
+        plain.truncate(at);
+        plain.push_str("expected a section: set one of its keys, section.key=VALUE");
+        plain.push_str(&tail);
+    }
     plain
 }
 
@@ -106,6 +117,18 @@ pub(super) fn name(name: Option<String>, default_name: &str) -> Result<String, S
     let name = name.unwrap_or_else(|| default_name.to_owned());
     if name.trim().is_empty() {
         return Err(invalid("name", format!("{name:?}"), "must not be empty"));
+    }
+    // The name names the run's folder (runs/<name>), whose earlier files a run removes.
+    if name.contains(['/', '\\'])
+        || name == "."
+        || name == ".."
+        || name.chars().any(char::is_control)
+    {
+        return Err(invalid(
+            "name",
+            format!("{name:?}"),
+            "must be a plain name, not a path: it names the run's folder, runs/<name>",
+        ));
     }
     Ok(name)
 }
