@@ -191,6 +191,9 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<Exit> {
         let dir = args.out.unwrap_or_else(|| folder_of(&args.merge[0]));
         return merge_command(&args.merge, &dir, args.allow_partial);
     }
+    if args.allow_partial {
+        return Err(Usage("--allow-partial goes with --merge FILES".into()).into());
+    }
     let scene_path = args.scene.expect("clap requires SCENE without --merge");
     let (text, stem) = read_scene_file(&scene_path)?;
     if shipped::kind(&text) != "coil" {
