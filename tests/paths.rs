@@ -109,6 +109,11 @@ const CASES: &[Case] = &[
         "nowhere",
         "IP:PORT or HOST:PORT",
     ),
+    (
+        &["sweep", "yoga-mat", "--allow-partial"],
+        "--allow-partial",
+        "goes with --merge",
+    ),
     // An output folder that is a file, or inside one.
     (
         &["run", "yoga-mat", "--out", "notes.txt"],
