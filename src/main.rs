@@ -247,8 +247,15 @@ fn run_command(scene: &Scene, out: Option<PathBuf>, view: &View) -> anyhow::Resu
         (false, None) => files::View::Off,
     };
     let mut files = RunFiles::take(&dir, scene, shown)?;
+    let layout = files.layout_path().unwrap_or_default();
+    if let Some(log) = files.view_mut()
+        && let Err(e) = serve(log, view, &layout)
+    {
+        files.abandon();
+        return Err(e);
+    }
     let stop = stop_flag();
-    let (text, end) = run_scene(scene, &mut files, view, &stop)?;
+    let (text, end) = run_scene(scene, &mut files, &layout, &stop)?;
     print!("{text}");
     match end.status() {
         Status::Completed => {}
@@ -482,17 +489,14 @@ fn serve(log: &mut ViewObserver, view: &View, layout: &Path) -> anyhow::Result<(
     }
 }
 
-/// Runs `scene` into its files; returns the summary and why the run stopped.
+/// Runs `scene` into its files (`layout`: the Foxglove layout beside its log); returns the
+/// summary and why the run stopped.
 fn run_scene(
     scene: &Scene,
     files: &mut RunFiles,
-    view: &View,
+    layout: &Path,
     stop: &AtomicBool,
 ) -> anyhow::Result<(String, StopReason)> {
-    let layout = files.layout_path().unwrap_or_default();
-    if let Some(log) = files.view_mut() {
-        serve(log, view, &layout)?;
-    }
     eprintln!("running {} into {} ...", scene.name, files.dir().display());
     let report = files.run(scene, None, stop)?;
     let mut text = summary(&report, files.dir());

@@ -346,3 +346,24 @@ fn shipped_names_work_in_every_command_outside_the_repository() {
     );
     assert!(at.join(layout).is_file());
 }
+
+/// A live server that cannot start (its port taken) leaves no lock or layout behind: the
+/// folder is not read afterwards as a run's that was killed.
+#[cfg(feature = "live")]
+#[test]
+fn a_live_server_that_cannot_start_leaves_no_run_behind() {
+    let place = Place::new();
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = taken.local_addr().unwrap().to_string();
+    let (code, stderr) = place.run(&["run", "yoga-mat", "--live", &addr, "--out", "live"]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&format!("cannot serve the live view on {addr}")),
+        "{stderr}"
+    );
+    let left: Vec<_> = std::fs::read_dir(place.dir.path().join("live"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}

@@ -55,6 +55,12 @@ impl RunFiles {
         })
     }
 
+    /// Gives the folder up before the run starts (a live server that could not start): the
+    /// layout and the lock are removed ([`RunFolder::abandon`]).
+    pub fn abandon(self) {
+        self.folder.abandon(&[LAYOUT]);
+    }
+
     /// The Foxglove layout written beside the view, if the run has one.
     pub fn layout_path(&self) -> Option<std::path::PathBuf> {
         self.view.as_ref().map(|_| self.folder.dir().join(LAYOUT))

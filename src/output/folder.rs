@@ -120,6 +120,16 @@ impl RunFolder {
     pub fn run_id(&self) -> &str {
         &self.run_id
     }
+
+    /// Gives the folder up before the run wrote anything: `written` (files made for it
+    /// already) and the lock file are removed, so no one reads the folder as a run's that
+    /// was killed. Best effort: what cannot be removed is left.
+    pub fn abandon(self, written: &[&str]) {
+        for name in written {
+            let _ = fs::remove_file(self.dir.join(name));
+        }
+        let _ = fs::remove_file(self.dir.join(LOCK));
+    }
 }
 
 /// Who took `dir`'s lock, as it wrote itself into the lock file, and whether a process
