@@ -114,6 +114,10 @@ enum Command {
         /// Scene files (TOML), e.g. scenes/*.toml, or shipped scenes' names, e.g. yoga-mat.
         #[arg(required = true)]
         scenes: Vec<PathBuf>,
+        /// Override a value of every scene, one word, e.g. `--set push.contact_speed_m_s=0.4`
+        /// (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<Override>,
     },
     /// List the shipped scenes, which every command takes by name: each one's name and kind.
     Scenes,
@@ -161,7 +165,7 @@ fn main() -> ExitCode {
             };
             run_any(&scene, &set, out, &view)
         }
-        Command::Compare { scenes } => compare(&scenes),
+        Command::Compare { scenes, set } => compare(&scenes, &set),
         Command::Scenes => {
             list_scenes();
             Ok(Exit::Ok)
@@ -324,7 +328,7 @@ fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> anyhow::Result<Exit> {
         );
         names.into_iter().map(PathBuf::from).collect()
     } else if one_scene {
-        coil_scene(&dir)?;
+        coil_scene(&dir, &[])?;
         vec![dir]
     } else {
         paths::folder(&dir, CHECK_TAKES)?;
@@ -400,9 +404,10 @@ fn salvage_run(dir: &Path) -> anyhow::Result<Exit> {
     Ok(Exit::Ok)
 }
 
-/// The coil's scene at `path` (a file or a shipped name); a folded chain's is bad input.
-fn coil_scene(path: &Path) -> anyhow::Result<Box<Scene>> {
-    match any_scene_file_with_overrides(path, &[])? {
+/// The coil's scene at `path` (a file or a shipped name) with `set` applied; a folded
+/// chain's is bad input.
+fn coil_scene(path: &Path, set: &[Override]) -> anyhow::Result<Box<Scene>> {
+    match any_scene_file_with_overrides(path, set)? {
         AnyScene::Coil(scene) => Ok(scene),
         AnyScene::FoldedChain(_) => Err(paths::PathError {
             path: path.to_owned(),
@@ -415,10 +420,10 @@ fn coil_scene(path: &Path) -> anyhow::Result<Box<Scene>> {
 
 /// Loads every scene first (a bad one fails before anything runs), then runs each and
 /// prints its table as soon as it is done.
-fn compare(paths: &[PathBuf]) -> anyhow::Result<Exit> {
+fn compare(paths: &[PathBuf], set: &[Override]) -> anyhow::Result<Exit> {
     let scenes = paths
         .iter()
-        .map(|p| coil_scene(p))
+        .map(|p| coil_scene(p, set))
         .collect::<anyhow::Result<Vec<_>>>()?;
     for scene in &scenes {
         eprintln!("running {} ...", scene.name);

@@ -121,7 +121,7 @@ fn sweep_shards_merge_and_report() {
     sweep(&shards, &["--quiet", "--shard", "1/2"])
         .success()
         .stdout(predicate::str::contains(
-            "1 runs (0 failed, 0 stopped by a guard) of 2 combinations",
+            "1 run (0 failed, 0 stopped by a guard) of 2 combinations",
         ));
     sweep(&shards, &["--quiet", "--shard", "2/2"]).success();
     let s1 = shards.join("sweep.1-of-2.csv");
@@ -159,7 +159,7 @@ fn sweep_shards_merge_and_report() {
     sweep(&resumed, &["--quiet", "--resume"])
         .success()
         .stdout(predicate::str::contains(
-            "1 runs (0 failed, 0 stopped by a guard, 1 kept from before) of 2 combinations",
+            "1 run (0 failed, 0 stopped by a guard, 1 kept from before) of 2 combinations",
         ));
     let again = SweepTable::read(&resumed.join("sweep.csv")).unwrap();
     assert_eq!(
@@ -272,7 +272,7 @@ fn a_guard_stop_is_recorded_as_stopped_and_left_out_of_the_report() {
         .assert()
         .code(3)
         .stdout(predicate::str::contains(
-            "1 runs (0 failed, 1 stopped by a guard) of 1 combinations",
+            "1 run (0 failed, 1 stopped by a guard) of 1 combination",
         ));
     let t = SweepTable::read(&out.join("sweep.csv")).unwrap();
     let status = cell(&t, 0, "status");

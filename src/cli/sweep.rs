@@ -119,6 +119,15 @@ fn same(a: &toml::Value, b: &toml::Value) -> bool {
     }
 }
 
+/// `n` things, `thing` in the singular or the plural as `n` asks.
+fn counted(n: usize, thing: &str) -> String {
+    if n == 1 {
+        format!("1 {thing}")
+    } else {
+        format!("{n} {thing}s")
+    }
+}
+
 fn parse_jobs(s: &str) -> Result<usize, String> {
     match s.parse::<usize>() {
         Ok(n) if n >= 1 => Ok(n),
@@ -250,9 +259,9 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<Exit> {
         stop: crate::stop_flag(),
     };
     eprintln!(
-        "sweeping {} ({} combinations{}) into {} ...",
+        "sweeping {} ({}{}) into {} ...",
         scene_path.display(),
-        sweep.len(),
+        counted(sweep.len(), "combination"),
         if opts.shard == Shard::ALL {
             String::new()
         } else {
@@ -273,11 +282,11 @@ fn ended(o: &SweepOutcome, all: bool) -> Exit {
         String::new()
     };
     println!(
-        "{} runs ({} failed, {} stopped by a guard{kept}) of {} combinations written to {}",
-        o.runs,
+        "{} ({} failed, {} stopped by a guard{kept}) of {} written to {}",
+        counted(o.runs, "run"),
         o.failed,
         o.stopped,
-        o.grid,
+        counted(o.grid, "combination"),
         o.path.display()
     );
     if let Some(signal) = signals::received() {

@@ -87,7 +87,7 @@ rm -f "$work"/uncoil-sweep-*.out
 SCENE=$scene OUT=$work/cancel UNCOIL=$bin VARY=$slow \
   sbatch --wait --array=1-2 --chdir="$work" --job-name=uncoil-cancel-test tools/slurm/sweep.sbatch
 cat "$work"/uncoil-sweep-*.out | tee "$work/cancelled.txt"
-grep -q "1 runs (0 failed, 0 stopped by a guard, 1 kept from before)" "$work/cancelled.txt"
+grep -q "1 run (0 failed, 0 stopped by a guard, 1 kept from before)" "$work/cancelled.txt"
 "$bin" sweep --merge "$work"/cancel/sweep.*-of-2.csv --out "$work/cancel"
 # shellcheck disable=SC2086 # slow holds several arguments.
 "$bin" sweep "$scene" $slow --quiet --jobs 1 --out "$work/cancel-local"
