@@ -333,6 +333,12 @@ fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> anyhow::Result<Exit> {
     } else {
         paths::folder(&dir, CHECK_TAKES)?;
         if dir.join(uncoil::output::folder::REPORT).exists() {
+            if out.is_some() {
+                anyhow::bail!(Usage(format!(
+                    "--out: {} is a run's folder, whose files are checked where they are",
+                    dir.display()
+                )));
+            }
             return Ok(verify_run(&dir));
         }
         if let Some(lines) = check::crashed_run(&dir) {

@@ -292,12 +292,26 @@ pub fn read_scene_file(path: &Path) -> Result<(String, String), SceneError> {
     }
 }
 
+impl SceneError {
+    /// This error of the scene read from `path`: a parse error names the file as given,
+    /// where it is a file (a shipped scene's keeps its name).
+    pub(crate) fn in_file(self, path: &Path) -> Self {
+        match self {
+            SceneError::Parse { message, .. } if path.is_file() => SceneError::Parse {
+                name: path.display().to_string(),
+                message,
+            },
+            other => other,
+        }
+    }
+}
+
 impl Scene {
     /// Reads and validates the scene file at `path`; the scene name defaults to the file
     /// stem.
     pub fn from_file(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let (text, stem) = read_scene_file(path.as_ref())?;
-        Self::from_toml_str(&text, &stem)
+        Self::from_toml_str(&text, &stem).map_err(|e| e.in_file(path.as_ref()))
     }
 
     /// Parses and validates scene TOML `text`; `name` is used when the text has no

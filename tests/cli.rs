@@ -55,7 +55,8 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
         "unknown key in [tape]",
         Edit::Replace("mass_kg = 1.5", "mass_kg = 1.5\ncolour = 1"),
         &[
-            "cannot parse scene case: ",
+            "cannot parse scene ",
+            "case.toml: ",
             "line 6, column 1",
             "unknown field `colour`",
             "expected one of `outer_radius_m`, `thickness_m`, `mass_kg`, `core_radius_m`",
@@ -65,7 +66,8 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
         "wrong type",
         Edit::Replace("mass_kg = 1.5", "mass_kg = \"heavy\""),
         &[
-            "cannot parse scene case: ",
+            "cannot parse scene ",
+            "case.toml: ",
             "line 5, column 11",
             "mass_kg = \"heavy\"",
             "invalid type: the text \"heavy\", expected a number",
@@ -74,7 +76,11 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
     (
         "missing required key",
         Edit::Replace("mass_kg = 1.5", ""),
-        &["cannot parse scene case: ", "missing field `mass_kg`"],
+        &[
+            "cannot parse scene ",
+            "case.toml: ",
+            "missing field `mass_kg`",
+        ],
     ),
     (
         "negative thickness",
@@ -150,7 +156,8 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
         "unknown top-level key",
         Edit::Replace("name = \"case\"", "name = \"case\"\ncolour = \"red\""),
         &[
-            "cannot parse scene case: ",
+            "cannot parse scene ",
+            "case.toml: ",
             "unknown field `colour`",
             "`tape`",
         ],
@@ -159,7 +166,8 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
         "unknown section",
         Edit::Append("[wind]\nspeed_m_s = 3.0"),
         &[
-            "cannot parse scene case: ",
+            "cannot parse scene ",
+            "case.toml: ",
             "unknown field `wind`",
             "`discretisation`",
         ],
@@ -174,7 +182,8 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
         "fractional link count",
         Edit::Append("[discretisation]\nlinks_per_turn = 32.5"),
         &[
-            "cannot parse scene case: ",
+            "cannot parse scene ",
+            "case.toml: ",
             "invalid type: the number `32.5`, expected a whole number",
         ],
     ),
@@ -197,7 +206,8 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
         "not TOML at all",
         Edit::Append("this is not toml"),
         &[
-            "cannot parse scene case: ",
+            "cannot parse scene ",
+            "case.toml: ",
             "line 8, column 6",
             "key with no value, expected `=`",
         ],
@@ -252,7 +262,7 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
     (
         "link count beyond i64",
         Edit::Append("[discretisation]\nlinks_per_turn = 99999999999999999999"),
-        &["cannot parse scene case: ", "line 9"],
+        &["cannot parse scene ", "case.toml: ", "line 9"],
     ),
     (
         "huge link count",
@@ -529,7 +539,11 @@ fn unreadable_scene_files_exit_2() {
         (
             "empty.toml",
             Some(b""),
-            &["error: cannot parse scene empty: ", "missing field `tape`"],
+            &[
+                "error: cannot parse scene ",
+                "empty.toml: ",
+                "missing field `tape`",
+            ],
         ),
     ];
     for (name, contents, expected) in cases {

@@ -57,14 +57,18 @@ const CASES: &[Case] = &[
         "a shipped scene can be named",
     ),
     (&["run", "folder"], "folder", "cannot read scene file"),
-    (&["run", "notes.txt"], "notes", "cannot parse scene"),
+    (&["run", "notes.txt"], "notes.txt: ", "cannot parse scene"),
     (
         &["compare", "no-such-scene"],
         "no-such-scene",
         "a shipped scene can be named",
     ),
     (&["compare", "folder"], "folder", "cannot read scene file"),
-    (&["compare", "table.csv"], "table", "cannot parse scene"),
+    (
+        &["compare", "table.csv"],
+        "table.csv: ",
+        "cannot parse scene",
+    ),
     (
         &["compare", "folded-chain"],
         "folded-chain",
@@ -76,13 +80,13 @@ const CASES: &[Case] = &[
         "a shipped scene can be named",
     ),
     (&["sweep", "folder"], "folder", "cannot read scene file"),
-    (&["sweep", "notes.txt"], "notes", "cannot parse scene"),
+    (&["sweep", "notes.txt"], "notes.txt: ", "cannot parse scene"),
     (
         &["sweep", "folded-chain"],
         "folded-chain",
         "expected a coil's scene",
     ),
-    (&["check", "notes.txt"], "notes", "cannot parse scene"),
+    (&["check", "notes.txt"], "notes.txt: ", "cannot parse scene"),
     // A value that is not of its key's kind, or a name that is a path.
     (
         &["run", "yoga-mat", "--set", "discretisation=12"],
@@ -345,6 +349,11 @@ fn shipped_names_work_in_every_command_outside_the_repository() {
         "{stdout}"
     );
     assert!(at.join(layout).is_file());
+    // A run's folder is checked where it is: an --out is refused, not ignored.
+    let (code, stderr) = place.run(&["check", "runs/yoga-mat", "--out", "elsewhere"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("checked where they are"), "{stderr}");
+    assert!(!at.join("elsewhere").exists());
 }
 
 /// A live server that cannot start (its port taken) leaves no lock or layout behind: the

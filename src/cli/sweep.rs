@@ -205,6 +205,10 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<Exit> {
     }
     let scene_path = args.scene.expect("clap requires SCENE without --merge");
     let (text, stem) = read_scene_file(&scene_path)?;
+    // The scene itself first, so that its own error is not a combination's.
+    if shipped::kind(&text) == "coil" {
+        uncoil::scene::overrides::scene_file_with_overrides(&scene_path, &[])?;
+    }
     if shipped::kind(&text) != "coil" {
         return Err(PathError {
             path: scene_path,
@@ -316,6 +320,14 @@ fn ended(o: &SweepOutcome, all: bool) -> Exit {
 /// is not a sweep's folder or file.
 pub fn report(args: &ReportArgs) -> anyhow::Result<Exit> {
     let sweep = paths::sweep_file(&args.sweep)?;
+    let name = sweep.file_name().unwrap_or_default().to_string_lossy();
+    if name.contains("-of-") {
+        eprintln!(
+            "note: {} is one shard's file; the whole sweep's report needs them joined first: \
+             uncoil sweep --merge FILES",
+            sweep.display()
+        );
+    }
     if let Some(out) = &args.out {
         paths::out_folder(out)?;
     }

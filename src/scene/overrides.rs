@@ -146,7 +146,7 @@ pub fn scene_file_with_overrides(
     overrides: &[Override],
 ) -> Result<Scene, SceneError> {
     let (text, stem) = crate::scene::read_scene_file(path)?;
-    scene_with_overrides(&text, &stem, overrides)
+    scene_with_overrides(&text, &stem, overrides).map_err(|e| e.in_file(path))
 }
 
 /// Reads the scene file at `path`, of either kind (its top-level `kind`), and applies
@@ -155,6 +155,11 @@ pub fn any_scene_file_with_overrides(
     path: &std::path::Path,
     overrides: &[Override],
 ) -> Result<AnyScene, SceneError> {
+    any_scene_text(path, overrides).map_err(|e| e.in_file(path))
+}
+
+/// [`any_scene_file_with_overrides`], its parse errors naming the scene by its name.
+fn any_scene_text(path: &std::path::Path, overrides: &[Override]) -> Result<AnyScene, SceneError> {
     let (text, stem) = crate::scene::read_scene_file(path)?;
     let kind = toml::from_str::<toml::Table>(&text)
         .ok()

@@ -79,6 +79,14 @@ impl Case {
     }
 }
 
+/// A simulated time as a message says it: to the microsecond, trailing zeros dropped
+/// (`29.75`, not the `29.750000000000004` a sum of steps leaves).
+pub(crate) fn seconds(t: f64) -> String {
+    let text = format!("{t:.6}");
+    let text = text.trim_end_matches('0');
+    text.strip_suffix('.').unwrap_or(text).to_owned()
+}
+
 /// The scene files (`*.toml`) of `dir`, sorted by name.
 pub fn scene_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)

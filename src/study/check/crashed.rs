@@ -52,7 +52,7 @@ pub fn crashed_run(dir: &Path) -> Option<Vec<String>> {
                 "{}.partial: {} complete rows, up to t = {} s simulated",
                 folder::SAMPLES,
                 cut.rows,
-                cut.t_s
+                super::seconds(cut.t_s)
             ),
             Err(e) => format!("{}.partial: not readable: {e:#}", folder::SAMPLES),
         });

@@ -253,7 +253,7 @@ pub fn describe(dir: &Path) -> Option<String> {
             "a killed run, salvaged: {} rows of samples up to t = {} s simulated, {}; no \
              ledger, bang or references (a run books them at its end)",
             r.rows,
-            r.t_s,
+            super::seconds(r.t_s),
             r.log_messages.map_or_else(
                 || "no log".to_owned(),
                 |m| format!("{m} messages in {}", folder::LOG)
