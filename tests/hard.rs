@@ -384,13 +384,14 @@ fn a_killed_run_is_salvaged_into_a_prefix_of_the_run_it_was() {
             .code(0);
         let said = String::from_utf8_lossy(&assert.get_output().stdout).into_owned();
         assert!(said.contains("sound and belong to one run"), "{said}");
-        // A second salvage is refused: the run has its report now.
+        // A second salvage is refused: the run has its report now, and says so.
         Command::cargo_bin("uncoil")
             .unwrap()
             .args(["check", "--salvage"])
             .arg(&out)
             .assert()
-            .code(2);
+            .code(2)
+            .stderr(predicate::str::contains("was salvaged already"));
     }
     assert!(
         logs_kept >= 2,

@@ -158,6 +158,11 @@ pub fn salvage(dir: &Path) -> Result<Salvaged, SalvageError> {
 /// `samples.csv.partial`. Returns what its lock file says (empty if it has none).
 fn killed_run(dir: &Path) -> Result<String, SalvageError> {
     let shown = dir.display();
+    if describe(dir).is_some() {
+        return Err(SalvageError::NotKilled(format!(
+            "{shown} was salvaged already: `uncoil check {shown}` says what it holds"
+        )));
+    }
     if dir.join(folder::REPORT).exists() {
         return Err(SalvageError::NotKilled(format!(
             "{shown} has a {}: its run ended, and there is nothing to salvage",
