@@ -314,17 +314,24 @@ const CHECK_TAKES: &str =
 /// scenes (the hard cases by default) run and verified.
 fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> anyhow::Result<Exit> {
     let dir = dir.unwrap_or_else(|| PathBuf::from(HARD));
-    let built_in = !dir.exists() && (dir == Path::new(HARD) || dir == Path::new("hard"));
+    // A folder holds work to check if it has scenes, a run's report or a killed run's
+    // files; one that does not (missing, or empty) does not hide a shipped name.
+    let work = dir.is_file()
+        || (dir.is_dir()
+            && (dir.join(uncoil::output::folder::REPORT).exists()
+                || check::crashed_run(&dir).is_some()
+                || check::scene_files(&dir).is_ok_and(|f| !f.is_empty())));
+    let built_in = !work && (dir == Path::new(HARD) || dir == Path::new("hard"));
     if let Some(out) = &out {
         paths::out_folder(out)?;
     }
-    let one_scene =
-        dir.is_file() || (!dir.exists() && dir.to_str().and_then(shipped::text).is_some());
+    let one_scene = dir.is_file() || (!work && dir.to_str().and_then(shipped::text).is_some());
     let files = if built_in {
         let names = shipped::hard_names();
         eprintln!(
-            "checking the {} hard cases built in ({HARD}/ is not here) ...",
-            names.len()
+            "checking the {} hard cases built in (no {} here holds them) ...",
+            names.len(),
+            dir.display()
         );
         names.into_iter().map(PathBuf::from).collect()
     } else if one_scene {
@@ -513,10 +520,11 @@ fn run_scene(
     let mut text = summary(&report, files.dir());
     if let Some(path) = files.log_path() {
         text.push_str(&format!(
-            "Wrote {0}: open it in Foxglove with the layout {1}, or list it with `uncoil \
-             inspect {0}`\n",
+            "Wrote {}: open it in Foxglove with the layout {}, or list it with `uncoil \
+             inspect {}`\n",
             path.display(),
-            layout.display()
+            layout.display(),
+            uncoil::output::shell_word(path)
         ));
     }
     Ok((text, report.stop))

@@ -39,6 +39,19 @@ pub static CSV_COLUMNS: LazyLock<Vec<&'static str>> = LazyLock::new(|| {
         .collect()
 });
 
+/// `path` as one word of a shell command that a hint prints: as it is when it is made of
+/// safe characters, else in single quotes (a `'` in it closed, escaped and reopened), so
+/// that the hint works when pasted.
+pub fn shell_word(path: &Path) -> String {
+    let text = path.display().to_string();
+    let safe = |c: char| c.is_ascii_alphanumeric() || "/._-+=:,@%".contains(c);
+    if !text.is_empty() && text.chars().all(safe) {
+        text
+    } else {
+        format!("'{}'", text.replace('\'', "'\\''"))
+    }
+}
+
 /// Writes `path` atomically: into `path.partial`, flushed to disk, then renamed.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     let tmp = partial_path(path);
@@ -187,5 +200,31 @@ impl Observer for ReportObserver {
         let mut text = serde_json::to_string_pretty(&written)?;
         text.push('\n');
         write_atomic(&self.path, text.as_bytes())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A hint's path, pasted into a shell, is the path: spaces, quotes and all.
+    #[test]
+    fn a_shell_word_reads_back_as_its_path() {
+        for path in [
+            "runs/yoga-mat",
+            "my dir/run.mcap",
+            "it's here",
+            "a\"b$c`d",
+            "",
+        ] {
+            let word = shell_word(Path::new(path));
+            let echoed = std::process::Command::new("sh")
+                .arg("-c")
+                .arg(format!("printf '%s' {word}"))
+                .output()
+                .unwrap();
+            assert_eq!(String::from_utf8_lossy(&echoed.stdout), path, "{word}");
+        }
+        assert_eq!(shell_word(Path::new("runs/yoga-mat")), "runs/yoga-mat");
     }
 }

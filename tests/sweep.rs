@@ -208,7 +208,7 @@ fn sweep_shards_merge_and_report() {
         .arg(&partial)
         .assert()
         .success()
-        .stdout(predicate::str::contains("merged 1 runs into"))
+        .stdout(predicate::str::contains("merged 1 run into"))
         .stdout(predicate::str::contains("shards missing: 2 of 2"));
     let note = std::fs::read_to_string(partial.join("sweep.missing.txt")).unwrap();
     assert!(note.contains("shards missing: 2 of 2"), "{note}");
@@ -497,9 +497,21 @@ fn sigterm_stops_a_sweep_its_running_row_says_interrupted_and_resume_finishes_it
         stderr.contains("interrupted by SIGTERM") && stderr.contains("--resume"),
         "stderr: {stderr}"
     );
-    // No run finished: what rows there are say interrupted, and none is left partial.
+    // No run finished: what rows there are say interrupted, and none is left partial; the
+    // closing line counts them, not the runs planned.
     let t = SweepTable::read(&out.join("sweep.csv")).unwrap();
     assert!(t.rows.len() <= 1, "{:?}", t.rows);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let line = format!(
+        "{} of 2 runs (0 failed, 0 stopped by a guard{}) of 2 combinations",
+        t.rows.len(),
+        if t.rows.is_empty() {
+            ""
+        } else {
+            ", 1 interrupted"
+        }
+    );
+    assert!(stdout.contains(&line), "stdout lacks `{line}`: {stdout}");
     for row in 0..t.rows.len() {
         assert_eq!(cell(&t, row, "status"), "interrupted");
     }

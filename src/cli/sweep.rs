@@ -9,7 +9,7 @@ use crate::cli::paths::{self, PathError};
 
 use clap::{Args, ValueEnum};
 
-use uncoil::output::write_atomic;
+use uncoil::output::{shell_word, write_atomic};
 use uncoil::run::signals;
 use uncoil::scene::read_scene_file;
 use uncoil::scene::shipped;
@@ -179,13 +179,17 @@ fn merge_command(files: &[PathBuf], dir: &Path, allow_partial: bool) -> anyhow::
     } else {
         uncoil::output::write_atomic(&note, missing.to_string().as_bytes())?;
     }
-    println!("merged {} runs into {}", table.rows.len(), p.display());
+    println!(
+        "merged {} into {}",
+        counted(table.rows.len(), "run"),
+        p.display()
+    );
     if !missing.is_empty() {
         print!("partial, as {} says:\n{missing}", note.display());
     }
     println!(
         "draw its report with: uncoil sweep-report {}",
-        dir.display()
+        shell_word(dir)
     );
     Ok(Exit::Ok)
 }
@@ -262,17 +266,19 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<Exit> {
         // other; `--resume` runs them and the rest.
         stop: crate::stop_flag(),
     };
-    eprintln!(
-        "sweeping {} ({}{}) into {} ...",
-        scene_path.display(),
-        counted(sweep.len(), "combination"),
-        if opts.shard == Shard::ALL {
-            String::new()
-        } else {
-            format!(", shard {}/{}", opts.shard.k, opts.shard.n)
-        },
-        dir.display()
-    );
+    if opts.progress {
+        eprintln!(
+            "sweeping {} ({}{}) into {} ...",
+            scene_path.display(),
+            counted(sweep.len(), "combination"),
+            if opts.shard == Shard::ALL {
+                String::new()
+            } else {
+                format!(", shard {}/{}", opts.shard.k, opts.shard.n)
+            },
+            dir.display()
+        );
+    }
     let all = opts.shard == Shard::ALL;
     Ok(ended(&sweep.run(&dir, &opts)?, all))
 }
@@ -285,9 +291,18 @@ fn ended(o: &SweepOutcome, all: bool) -> Exit {
     } else {
         String::new()
     };
+    let ran = if o.written == o.runs {
+        counted(o.runs, "run")
+    } else {
+        format!("{} of {}", o.written, counted(o.runs, "run"))
+    };
+    let interrupted = if o.interrupted > 0 {
+        format!(", {} interrupted", o.interrupted)
+    } else {
+        String::new()
+    };
     println!(
-        "{} ({} failed, {} stopped by a guard{kept}) of {} written to {}",
-        counted(o.runs, "run"),
+        "{ran} ({} failed, {} stopped by a guard{interrupted}{kept}) of {} written to {}",
         o.failed,
         o.stopped,
         counted(o.grid, "combination"),
@@ -303,13 +318,13 @@ fn ended(o: &SweepOutcome, all: bool) -> Exit {
         if all {
             println!(
                 "draw its report with: uncoil sweep-report {}",
-                dir.display()
+                shell_word(&dir)
             );
         } else {
             println!(
                 "once every shard has run, join them with: uncoil sweep --merge \
                  {}/sweep.*-of-*.csv",
-                dir.display()
+                shell_word(&dir)
             );
         }
     }

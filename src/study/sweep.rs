@@ -49,6 +49,10 @@ pub struct SweepOutcome {
     pub grid: usize,
     /// Runs in this shard.
     pub runs: usize,
+    /// Rows written this time: `runs`, less those a signal kept from starting.
+    pub written: usize,
+    /// Runs a signal stopped (`interrupted`).
+    pub interrupted: usize,
     /// Rows kept from the shard's file by `--resume` (not run again).
     pub kept: usize,
     /// Runs whose status is `failed: ...`.
@@ -171,6 +175,7 @@ impl Sweep {
             done: Mutex::new(0),
             failed: Mutex::new(0),
             stopped: Mutex::new(0),
+            interrupted: Mutex::new(0),
             stop: &opts.stop,
         };
         let result: anyhow::Result<()> = if runner.jobs == 1 {
@@ -180,8 +185,10 @@ impl Sweep {
         };
         let Runner {
             bar,
+            done,
             failed,
             stopped,
+            interrupted,
             ..
         } = runner;
         if let Some(b) = bar {
@@ -193,6 +200,8 @@ impl Sweep {
             path,
             grid: self.combos.len(),
             runs: mine.len(),
+            written: done.into_inner().expect("no panic holds the lock"),
+            interrupted: interrupted.into_inner().expect("no panic holds the lock"),
             kept: kept.len(),
             failed: failed.into_inner().expect("no panic holds the lock"),
             stopped: stopped.into_inner().expect("no panic holds the lock"),
@@ -294,6 +303,7 @@ struct Runner<'a> {
     bar: Option<indicatif::ProgressBar>,
     progress: bool,
     done: Mutex<usize>,
+    interrupted: Mutex<usize>,
     failed: Mutex<usize>,
     stopped: Mutex<usize>,
     stop: &'a AtomicBool,
@@ -369,6 +379,9 @@ impl Runner<'_> {
         row.extend(result_cells(report, self.jobs));
         if report.stop.guard().is_some() {
             *self.stopped.lock().expect("no panic holds the lock") += 1;
+        }
+        if report.stop.status() == crate::run::stop::Status::Interrupted {
+            *self.interrupted.lock().expect("no panic holds the lock") += 1;
         }
         let status = row.last().cloned().unwrap_or_default();
         let err = report

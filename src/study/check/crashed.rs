@@ -89,7 +89,7 @@ pub fn crashed_run(dir: &Path) -> Option<Vec<String>> {
     if !running && samples.exists() {
         lines.push(format!(
             "to keep what it wrote: uncoil check {} --salvage",
-            dir.display()
+            crate::output::shell_word(dir)
         ));
     }
     Some(lines)

@@ -160,7 +160,8 @@ fn killed_run(dir: &Path) -> Result<String, SalvageError> {
     let shown = dir.display();
     if describe(dir).is_some() {
         return Err(SalvageError::NotKilled(format!(
-            "{shown} was salvaged already: `uncoil check {shown}` says what it holds"
+            "{shown} was salvaged already: `uncoil check {}` says what it holds",
+            crate::output::shell_word(dir)
         )));
     }
     if dir.join(folder::REPORT).exists() {
