@@ -198,7 +198,7 @@ fn sweep_shards_merge_and_report() {
         .assert()
         .code(1)
         .stderr(predicate::str::contains(
-            "shards missing: 2 of 2 (sweep.2-of-2.csv)",
+            "missing, of the 2 shards: shard 2 (sweep.2-of-2.csv)",
         ));
     assert!(!partial.join("sweep.csv").exists());
     uncoil()
@@ -209,9 +209,11 @@ fn sweep_shards_merge_and_report() {
         .assert()
         .success()
         .stdout(predicate::str::contains("merged 1 run into"))
-        .stdout(predicate::str::contains("shards missing: 2 of 2"));
+        .stdout(predicate::str::contains(
+            "missing, of the 2 shards: shard 2",
+        ));
     let note = std::fs::read_to_string(partial.join("sweep.missing.txt")).unwrap();
-    assert!(note.contains("shards missing: 2 of 2"), "{note}");
+    assert!(note.contains("missing, of the 2 shards: shard 2"), "{note}");
     // A combination found twice is refused: not shards of one sweep, bad input.
     uncoil()
         .args(["sweep", "--merge"])

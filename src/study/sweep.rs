@@ -388,12 +388,18 @@ impl Runner<'_> {
             .milestones
             .iter()
             .filter_map(|m| m.err_vs_geo)
-            .fold(0.0_f64, |a, e| a.max(e.abs()));
-        format!(
-            "{status}, {:.3} s wall to the bang, max |err vs exact| {:.3}%",
-            report.wall_time_rolling_s,
-            100.0 * err
-        )
+            .map(f64::abs)
+            .reduce(f64::max);
+        let wall = if report.ledger.bang_time_s.is_some() {
+            format!("{:.3} s wall to the bang", report.wall_time_rolling_s)
+        } else {
+            format!("{:.3} s wall, no bang", report.wall_time_s)
+        };
+        let err = err.map_or_else(
+            || "no milestone reached".to_owned(),
+            |e| format!("max |err vs exact| {:.3}%", 100.0 * e),
+        );
+        format!("{status}, {wall}, {err}")
     }
 
     /// Completes the row of a run that failed with `e` (empty result cells, a `failed: ...`

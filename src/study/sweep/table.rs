@@ -164,18 +164,22 @@ impl std::fmt::Display for Missing {
             let names: Vec<String> = ks.iter().map(|&k| file_name(Shard { k, n: *n })).collect();
             writeln!(
                 f,
-                "shards missing: {} of {n} ({})",
+                "missing, of the {n} shards: shard {} ({})",
                 list(ks),
                 names.join(", ")
             )?;
         }
         if !self.combinations.is_empty() {
-            writeln!(f, "combinations in no file: {}", list(&self.combinations))?;
+            writeln!(
+                f,
+                "combinations in no file, by index: {}",
+                list(&self.combinations)
+            )?;
         }
         for (path, rows) in &self.cut {
             writeln!(
                 f,
-                "{} is cut mid-row: its {rows} complete rows are kept",
+                "{} is cut mid-row after {rows} complete rows, which the merge takes",
                 path.display()
             )?;
         }
@@ -458,11 +462,11 @@ mod tests {
         assert_eq!(missing.cut, [(three.clone(), 1)]);
         let text = missing.to_string();
         assert!(
-            text.contains("shards missing: 2 of 3 (sweep.2-of-3.csv)"),
+            text.contains("missing, of the 3 shards: shard 2 (sweep.2-of-3.csv)"),
             "{text}"
         );
         assert!(
-            text.contains("is cut mid-row: its 1 complete rows are kept"),
+            text.contains("is cut mid-row after 1 complete rows, which the merge takes"),
             "{text}"
         );
         // A task killed between rows leaves a file that ends with a whole row: the last
