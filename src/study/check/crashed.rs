@@ -8,28 +8,56 @@ use std::path::Path;
 use crate::output::inspect::read_inventory;
 use crate::output::{folder, partial_path};
 
+/// A folder whose run did not finish: no `report.json`, and its `.partial` files or its
+/// lock. The one test of a killed (or still running) run's folder, for `check` and
+/// `check --salvage`.
+pub(super) struct Unfinished {
+    /// The `.partial` files' names.
+    pub(super) partial: Vec<String>,
+    /// Who the lock names, and whether a process still holds it.
+    pub(super) lock: Option<(String, bool)>,
+}
+
+impl Unfinished {
+    /// What `dir` holds if its run did not finish; `None` if it has a report, or neither
+    /// a partial file nor a lock.
+    pub(super) fn of(dir: &Path) -> Option<Self> {
+        if dir.join(folder::REPORT).exists() {
+            return None;
+        }
+        let partial: Vec<String> = [folder::SAMPLES, folder::REPORT, folder::LOG]
+            .into_iter()
+            .map(|name| partial_path(&dir.join(name)))
+            .filter(|p| p.exists())
+            .map(|p| {
+                p.file_name()
+                    .unwrap_or_default()
+                    .to_string_lossy()
+                    .into_owned()
+            })
+            .collect();
+        let lock = folder::lock_holder(dir);
+        (!partial.is_empty() || lock.is_some()).then_some(Self { partial, lock })
+    }
+
+    /// Whether a process still holds the lock: the run is going.
+    pub(super) fn running(&self) -> bool {
+        self.lock.as_ref().is_some_and(|(_, held)| *held)
+    }
+
+    /// Whether its samples were left partial: what a salvage keeps.
+    pub(super) fn has_samples(&self) -> bool {
+        let name = format!("{}.partial", folder::SAMPLES);
+        self.partial.contains(&name)
+    }
+}
+
 /// What the folder `dir` holds if a run was killed in it (a `.partial` file or a lock, and
 /// no `report.json`), a fact a line; `None` if it is not such a folder.
 pub fn crashed_run(dir: &Path) -> Option<Vec<String>> {
-    if dir.join(folder::REPORT).exists() {
-        return None;
-    }
-    let partial: Vec<String> = [folder::SAMPLES, folder::REPORT, folder::LOG]
-        .into_iter()
-        .map(|name| partial_path(&dir.join(name)))
-        .filter(|p| p.exists())
-        .map(|p| {
-            p.file_name()
-                .unwrap_or_default()
-                .to_string_lossy()
-                .into_owned()
-        })
-        .collect();
-    let lock = folder::lock_holder(dir);
-    if partial.is_empty() && lock.is_none() {
-        return None;
-    }
-    let running = lock.as_ref().is_some_and(|(_, held)| *held);
+    let unfinished = Unfinished::of(dir)?;
+    let running = unfinished.running();
+    let Unfinished { partial, lock } = unfinished;
     let mut lines = vec![format!(
         "{}: no {}; partial files: {}",
         if running {

@@ -27,7 +27,7 @@ use crate::output::folder::{self, FileStamp};
 use crate::output::{CSV_COLUMNS, partial_path, write_atomic};
 use crate::scene::folded;
 
-use super::crashed::Cut;
+use super::crashed::{Cut, Unfinished};
 
 /// The `kind` of a salvaged run's `report.json`.
 pub const KIND: &str = "salvaged";
@@ -170,19 +170,22 @@ fn killed_run(dir: &Path) -> Result<String, SalvageError> {
             folder::REPORT
         )));
     }
-    let lock = folder::lock_holder(dir);
-    if let Some((holder, true)) = &lock {
+    let unfinished = Unfinished::of(dir);
+    if let Some(u) = &unfinished
+        && u.running()
+    {
+        let holder = u.lock.as_ref().map_or("", |(h, _)| h.as_str());
         return Err(SalvageError::NotKilled(format!(
             "{shown}: a run still writes it ({holder}); salvage it once that process is gone"
         )));
     }
-    if !partial_path(&dir.join(folder::SAMPLES)).exists() {
-        return Err(SalvageError::NotKilled(format!(
+    match unfinished {
+        Some(u) if u.has_samples() => Ok(u.lock.map(|(h, _)| h).unwrap_or_default()),
+        _ => Err(SalvageError::NotKilled(format!(
             "{shown} holds no {}.partial: not a killed run's folder",
             folder::SAMPLES
-        )));
+        ))),
     }
-    Ok(lock.map(|(h, _)| h).unwrap_or_default())
 }
 
 /// The complete rows of a killed run's `samples` and whose columns they have (`coil` or
