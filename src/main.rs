@@ -21,8 +21,7 @@ use clap::{Parser, Subcommand};
 
 use uncoil::output::compare::{SampleLog, table};
 use uncoil::output::files::{self, RunFiles};
-use uncoil::output::folded::{chain_summary, write_chain_run};
-use uncoil::output::folder::{RunFolder, run_id};
+use uncoil::output::folded::{chain_summary, take_folder, write_chain_run};
 use uncoil::output::summary;
 use uncoil::output::view::ViewObserver;
 use uncoil::run::run;
@@ -202,9 +201,8 @@ fn split_value(args: &[OsString]) -> Option<String> {
 
 /// `uncoil scenes`: each shipped scene's name and kind, then the hard cases'.
 fn list_scenes() {
-    for name in shipped::names().into_iter().chain(shipped::hard_names()) {
-        let text = shipped::text(name).unwrap_or_default();
-        println!("{name:<26} {}", shipped::kind(text));
+    for (name, kind) in shipped::listed() {
+        println!("{name:<26} {kind}");
     }
 }
 
@@ -284,7 +282,7 @@ fn run_chain_command(
         )));
     }
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&chain.name));
-    let folder = RunFolder::take(&dir, &run_id(&chain.name, &chain.source_text), &chain.name)?;
+    let folder = take_folder(chain, &dir)?;
     let stop = stop_flag();
     eprintln!("running {} into {} ...", chain.name, dir.display());
     let report = write_chain_run(chain, &folder, &mut |_| Ok(()), &stop)?;
@@ -314,13 +312,15 @@ const CHECK_TAKES: &str =
 /// scenes (the hard cases by default) run and verified.
 fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> anyhow::Result<Exit> {
     let dir = dir.unwrap_or_else(|| PathBuf::from(HARD));
-    // A folder holds work to check if it has scenes, a run's report or a killed run's
-    // files; one that does not (missing, or empty) does not hide a shipped name.
-    let work = dir.is_file()
-        || (dir.is_dir()
-            && (dir.join(uncoil::output::folder::REPORT).exists()
-                || check::crashed_run(&dir).is_some()
-                || check::scene_files(&dir).is_ok_and(|f| !f.is_empty())));
+    // What the folder holds, read once. It holds work to check if it has a run's report, a
+    // killed run's files or scenes; one that does not (missing, or empty) does not hide a
+    // shipped name.
+    let is_folder = dir.is_dir();
+    let report = is_folder && dir.join(uncoil::output::folder::REPORT).exists();
+    let crashed = is_folder.then(|| check::crashed_run(&dir)).flatten();
+    let scenes = is_folder.then(|| check::scene_files(&dir));
+    let has_scenes = matches!(&scenes, Some(Ok(f)) if !f.is_empty());
+    let work = dir.is_file() || report || crashed.is_some() || has_scenes;
     let built_in = !work && (dir == Path::new(HARD) || dir == Path::new("hard"));
     if let Some(out) = &out {
         paths::out_folder(out)?;
@@ -339,7 +339,7 @@ fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> anyhow::Result<Exit> {
         vec![dir]
     } else {
         paths::folder(&dir, CHECK_TAKES)?;
-        if dir.join(uncoil::output::folder::REPORT).exists() {
+        if report {
             if out.is_some() {
                 anyhow::bail!(Usage(format!(
                     "--out: {} is a run's folder, whose files are checked where they are",
@@ -348,13 +348,13 @@ fn check(dir: Option<PathBuf>, out: Option<PathBuf>) -> anyhow::Result<Exit> {
             }
             return Ok(verify_run(&dir));
         }
-        if let Some(lines) = check::crashed_run(&dir) {
+        if let Some(lines) = crashed {
             for line in lines {
                 println!("{}: {line}", dir.display());
             }
             return Ok(Exit::Failed);
         }
-        let files = check::scene_files(&dir)?;
+        let files = scenes.unwrap_or_else(|| Ok(Vec::new()))?;
         if files.is_empty() {
             anyhow::bail!(paths::PathError {
                 path: dir,

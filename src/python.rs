@@ -14,8 +14,7 @@ use pyo3::types::PyBytes;
 
 use crate::output::fields::fields;
 use crate::output::files::{RunFiles, View};
-use crate::output::folded::{chain_report_json, write_chain_run};
-use crate::output::folder::{RunFolder, run_id};
+use crate::output::folded::{chain_report_json, take_folder, write_chain_run};
 use crate::run::folded::run_chain;
 use crate::run::{Observer, RunReport, Sample, run_until};
 use crate::scene::folded::FoldedChain;
@@ -63,10 +62,7 @@ impl PyScene {
     /// The scene's kind: `coil` or `folded-chain`.
     #[getter]
     fn kind(&self) -> &'static str {
-        match &self.inner {
-            AnyScene::Coil(_) => "coil",
-            AnyScene::FoldedChain(_) => crate::scene::folded::KIND,
-        }
+        self.inner.kind()
     }
 
     /// The scene file's text, with one `# override:` line per override.
@@ -112,11 +108,7 @@ fn load_scene(path: PathBuf, overrides: Vec<(String, String)>) -> PyResult<PySce
 /// or `folded-chain`): the scenes, then the hard cases (`hard/...`).
 #[pyfunction]
 fn scenes() -> Vec<(&'static str, &'static str)> {
-    shipped::names()
-        .into_iter()
-        .chain(shipped::hard_names())
-        .map(|name| (name, shipped::kind(shipped::text(name).unwrap_or_default())))
-        .collect()
+    shipped::listed()
 }
 
 /// The samples of a run, column by column, in `samples.csv`'s order.
@@ -185,11 +177,7 @@ fn run_folded(
     let mut each = |s: &crate::run::folded::ChainSample| columns.push(s);
     let report = match out {
         None => run_chain(chain, &mut each, stop)?,
-        Some(dir) => {
-            let id = run_id(&chain.name, &chain.source_text);
-            let folder = RunFolder::take(dir, &id, &chain.name)?;
-            write_chain_run(chain, &folder, &mut each, stop)?
-        }
+        Some(dir) => write_chain_run(chain, &take_folder(chain, dir)?, &mut each, stop)?,
     };
     Ok((columns, chain_report_json(chain, &report)?))
 }

@@ -269,6 +269,23 @@ pub enum AnyScene {
     FoldedChain(folded::FoldedChain),
 }
 
+impl AnyScene {
+    /// Its kind, as a file declares it: `coil` or `folded-chain`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            AnyScene::Coil(_) => "coil",
+            AnyScene::FoldedChain(_) => folded::KIND,
+        }
+    }
+}
+
+/// The top-level `kind` a scene's text declares, if it reads as TOML and has one.
+pub(crate) fn declared_kind(text: &str) -> Option<toml::Value> {
+    toml::from_str::<toml::Table>(text)
+        .ok()
+        .and_then(|mut t| t.remove("kind"))
+}
+
 /// The text of the scene file at `path` and its stem, the scene's default name; when no
 /// such file exists (or a folder is of that name) and `path` is a shipped scene's name
 /// (`yoga-mat`), that scene's.
@@ -295,7 +312,7 @@ pub fn read_scene_file(path: &Path) -> Result<(String, String), SceneError> {
 impl SceneError {
     /// This error of the scene read from `path`: a parse error names the file as given,
     /// where it is a file (a shipped scene's keeps its name).
-    pub(crate) fn in_file(self, path: &Path) -> Self {
+    pub fn in_file(self, path: &Path) -> Self {
         match self {
             SceneError::Parse { message, .. } if path.is_file() => SceneError::Parse {
                 name: path.display().to_string(),

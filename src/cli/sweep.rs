@@ -11,6 +11,7 @@ use clap::{Args, ValueEnum};
 
 use uncoil::output::{shell_word, write_atomic};
 use uncoil::run::signals;
+use uncoil::scene::overrides::scene_with_overrides;
 use uncoil::scene::read_scene_file;
 use uncoil::scene::shipped;
 use uncoil::study::analysis::{Reference, SweepAnalysis};
@@ -211,7 +212,7 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<Exit> {
     let (text, stem) = read_scene_file(&scene_path)?;
     // The scene itself first, so that its own error is not a combination's.
     if shipped::kind(&text) == "coil" {
-        uncoil::scene::overrides::scene_file_with_overrides(&scene_path, &[])?;
+        scene_with_overrides(&text, &stem, &[]).map_err(|e| e.in_file(&scene_path))?;
     }
     if shipped::kind(&text) != "coil" {
         return Err(PathError {

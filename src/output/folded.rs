@@ -9,7 +9,7 @@ use std::sync::atomic::AtomicBool;
 use anyhow::Context as _;
 use serde::Serialize;
 
-use crate::output::folder::{FileStamp, REPORT, RunFolder, SAMPLES};
+use crate::output::folder::{FileStamp, FolderError, REPORT, RunFolder, SAMPLES, run_id};
 use crate::output::table::Table;
 use crate::output::{partial_path, write_atomic};
 use crate::run::folded::{ChainEnd, ChainReport, ChainSample, Crossing, run_chain};
@@ -40,6 +40,12 @@ pub fn chain_report_json(scene: &FoldedChain, report: &ChainReport) -> anyhow::R
         files: std::collections::BTreeMap::new(),
     };
     Ok(serde_json::to_string(&written)?)
+}
+
+/// Takes `dir` for a run of the chain `scene` ([`RunFolder::take`], under the chain's run
+/// id).
+pub fn take_folder(scene: &FoldedChain, dir: &std::path::Path) -> Result<RunFolder, FolderError> {
+    RunFolder::take(dir, &run_id(&scene.name, &scene.source_text), &scene.name)
 }
 
 /// Runs `scene` into `folder` (taken for it, so emptied of earlier runs' files):

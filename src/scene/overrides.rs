@@ -161,10 +161,7 @@ pub fn any_scene_file_with_overrides(
 /// [`any_scene_file_with_overrides`], its parse errors naming the scene by its name.
 fn any_scene_text(path: &std::path::Path, overrides: &[Override]) -> Result<AnyScene, SceneError> {
     let (text, stem) = crate::scene::read_scene_file(path)?;
-    let kind = toml::from_str::<toml::Table>(&text)
-        .ok()
-        .and_then(|t| t.get("kind").cloned());
-    match kind {
+    match crate::scene::declared_kind(&text) {
         None => scene_with_overrides(&text, &stem, overrides).map(|s| AnyScene::Coil(Box::new(s))),
         Some(toml::Value::String(k)) if k == folded::KIND => {
             let parse = |t: &str| FoldedChain::from_toml_str(t, &stem);

@@ -107,13 +107,20 @@ pub fn text(name: &str) -> Option<&'static str> {
 /// The kind of a shipped scene's text: `folded-chain` for a folded chain's (a top-level
 /// `kind`), else `coil`.
 pub fn kind(text: &str) -> &'static str {
-    match toml::from_str::<toml::Table>(text)
-        .ok()
-        .and_then(|t| t.get("kind").cloned())
-    {
+    match super::declared_kind(text) {
         Some(toml::Value::String(k)) if k == super::folded::KIND => super::folded::KIND,
         _ => "coil",
     }
+}
+
+/// Every shipped scene, the scenes then the hard cases, with its kind: what `uncoil
+/// scenes` prints and `uncoil.scenes()` returns.
+pub fn listed() -> Vec<(&'static str, &'static str)> {
+    SHIPPED
+        .iter()
+        .chain(HARD)
+        .map(|&(name, text)| (name, kind(text)))
+        .collect()
 }
 
 #[cfg(test)]

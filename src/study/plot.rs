@@ -320,18 +320,19 @@ fn legend_spot(
             *n += usize::from(x >= b[0] && x <= b[2] && y >= b[1] && y <= b[3]);
         }
     };
+    let at = |p: &BackendCoord| (f64::from(p.0), f64::from(p.1));
     for line in ink {
-        let at = |i: usize| (f64::from(line[i].0), f64::from(line[i].1));
-        for i in 0..line.len() {
-            count(at(i));
-            if let Some(j) = (i + 1 < line.len()).then_some(i + 1) {
-                let ((x0, y0), (x1, y1)) = (at(i), at(j));
-                let steps = ((x1 - x0).hypot(y1 - y0) / 2.0).ceil().min(4000.0);
-                for k in 1..steps as usize {
-                    let s = k as f64 / steps;
-                    count((x0 + s * (x1 - x0), y0 + s * (y1 - y0)));
-                }
+        if let Some(first) = line.first() {
+            count(at(first));
+        }
+        for pair in line.windows(2) {
+            let ((x0, y0), (x1, y1)) = (at(&pair[0]), at(&pair[1]));
+            let steps = ((x1 - x0).hypot(y1 - y0) / 2.0).ceil().min(4000.0);
+            for k in 1..steps as usize {
+                let s = k as f64 / steps;
+                count((x0 + s * (x1 - x0), y0 + s * (y1 - y0)));
             }
+            count((x1, y1));
         }
     }
     let best = (0..places.len()).min_by_key(|&i| covered[i]).unwrap_or(0);
