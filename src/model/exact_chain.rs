@@ -488,6 +488,54 @@ impl ExactChain {
     }
 }
 
+/// Which of a rigid body's `points` can touch a floor: the corners of their convex hull
+/// (Andrew's monotone chain), a point on the line between two others dropped. A half-plane
+/// reaches a body first at a corner; a point inside the hull or on an edge between corners
+/// touches only when both ends of that edge do, and the impulse it would take is the same
+/// force and moment shared between them. So the floor holds a body exactly as well by its
+/// corners alone, and a piece lying flat keeps two contacts instead of one per node. Points
+/// are compared exactly: points collinear only within rounding stay, harmlessly.
+pub fn hull_corners(points: &[[f64; 2]]) -> Vec<bool> {
+    let mut corner = vec![false; points.len()];
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by(|&a, &b| {
+        points[a][0]
+            .total_cmp(&points[b][0])
+            .then(points[a][1].total_cmp(&points[b][1]))
+    });
+    order.dedup_by(|a, b| points[*a] == points[*b]);
+    if order.len() <= 2 {
+        for &i in &order {
+            corner[i] = true;
+        }
+        return corner;
+    }
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
+    // The lower hull left to right, then the upper right to left.
+    let mut hull: Vec<usize> = Vec::with_capacity(2 * order.len());
+    for pass in [order.clone(), order.iter().rev().copied().collect()] {
+        let base = hull.len();
+        for i in pass {
+            while hull.len() >= base + 2
+                && cross(
+                    points[hull[hull.len() - 2]],
+                    points[hull[hull.len() - 1]],
+                    points[i],
+                ) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(i);
+        }
+    }
+    for i in hull {
+        corner[i] = true;
+    }
+    corner
+}
+
 /// `p` turned by `angle` (rad).
 fn rotate(p: [f64; 2], angle: f64) -> [f64; 2] {
     let (s, c) = angle.sin_cos();

@@ -37,6 +37,10 @@ pub(in crate::model) struct ExactBang {
     before: (Vec<Body>, f64),
     /// The bodies before the step being taken (a buffer reused from step to step).
     pending: Vec<Body>,
+    /// Each engine body's pose and velocity as the last step left it: a body still so is
+    /// not read back (the engine's pose rounds the chain's angle), so the chain's own state
+    /// carries on exactly, and its factorisation at that pose serves the next step.
+    written: Vec<(Pose, Vector, f64)>,
 }
 
 impl Model {
@@ -82,6 +86,13 @@ impl Model {
             body.set_linvel(Vector::new(b.velocity_m_s[0], b.velocity_m_s[1]), false);
             body.set_angvel(b.spin_rad_s, false);
         }
+        exact.written.clear();
+        exact.written.extend(
+            exact
+                .bodies
+                .iter()
+                .map(|&h| engine_state(&self.world.bodies[h])),
+        );
         self.bang.solve = exact.stats;
         exact
             .chain
@@ -150,14 +161,19 @@ impl Model {
         let pin = self.first_pin();
         let (stats, failed) = match &mut self.exact {
             Some(ex) if ex.bodies == handles && ex.pin == pin => {
-                for ((b, &h), &c) in ex
+                let written = std::mem::take(&mut ex.written);
+                for (i, ((b, &h), &c)) in ex
                     .chain
                     .bodies_mut()
                     .iter_mut()
                     .zip(&handles)
                     .zip(&ex.centres)
+                    .enumerate()
                 {
-                    *b = exact_body(&self.world.bodies[h], c);
+                    let body = &self.world.bodies[h];
+                    if written.get(i) != Some(&engine_state(body)) {
+                        *b = exact_body(body, c);
+                    }
                 }
                 return;
             }
@@ -221,16 +237,25 @@ impl Model {
                 ..exact_chain::tolerance_for(shortest)
             },
         );
-        // Each piece touches the floor at its nodes; a node two pieces share (or the pin's)
-        // belongs to the piece before it.
-        let points: Vec<Vec<[f64; 2]>> = free
+        // Each piece touches the floor at the corners of its nodes' hull
+        // (`exact_chain::hull_corners`); a node two pieces share (or the pin's) belongs to
+        // the piece before it, which keeps it if it is a corner of either.
+        let nodes: Vec<Vec<[f64; 2]>> = free
+            .iter()
+            .zip(&centres)
+            .map(|(&p, &c)| self.piece_nodes(p).map(|n| at(n - c)).collect())
+            .collect();
+        let corners: Vec<Vec<bool>> = nodes.iter().map(|n| exact_chain::hull_corners(n)).collect();
+        let points: Vec<Vec<[f64; 2]>> = nodes
             .iter()
             .enumerate()
-            .map(|(i, &p)| {
-                let skip = usize::from(i > 0 || pin.is_some());
-                self.piece_nodes(p)
-                    .skip(skip)
-                    .map(|n| at(n - centres[i]))
+            .map(|(i, n)| {
+                let skip = i > 0 || pin.is_some();
+                let next_first = corners.get(i + 1).is_some_and(|c| c[0]);
+                (0..n.len())
+                    .filter(|&j| !(skip && j == 0))
+                    .filter(|&j| corners[i][j] || (j + 1 == n.len() && next_first))
+                    .map(|j| n[j])
                     .collect()
             })
             .collect();
@@ -241,15 +266,11 @@ impl Model {
             friction: self.settings.friction,
         };
         chain.set_floor(floor, &points);
-        let nodes = free
-            .iter()
-            .zip(&centres)
-            .map(|(&p, &c)| self.piece_nodes(p).map(|n| at(n - c)).collect())
-            .collect();
         ExactBang {
             nodes,
             before: (Vec::new(), 0.0),
             pending: Vec::new(),
+            written: Vec::new(),
             chain,
             bodies: handles,
             pin,
@@ -261,6 +282,11 @@ impl Model {
             caught_j: 0.0,
         }
     }
+}
+
+/// An engine body's pose and velocity.
+fn engine_state(body: &RigidBody) -> (Pose, Vector, f64) {
+    (*body.position(), body.linvel(), body.angvel())
 }
 
 /// An engine body as the exact chain holds it, about its centre of mass `centre` (its own

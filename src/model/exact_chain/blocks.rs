@@ -42,6 +42,12 @@ pub(super) struct Singular {
 impl BlockTridiag {
     /// Sets the block sizes and zeroes every block.
     pub(super) fn reset(&mut self, sizes: &[usize]) {
+        if self.sizes == sizes {
+            self.diag.fill(0.0);
+            self.upper.fill(0.0);
+            self.lower.fill(0.0);
+            return;
+        }
         self.sizes.clear();
         self.sizes.extend_from_slice(sizes);
         self.row_at.clear();
@@ -75,19 +81,35 @@ impl BlockTridiag {
         self.sizes[i]
     }
 
+    /// Block `i`'s diagonal block, and `U_i` and `L_{i+1}` (empty for the last block), each
+    /// row-major.
+    pub(super) fn blocks_mut(&mut self, i: usize) -> [&mut [f64]; 3] {
+        let s = self.sizes[i];
+        let s1 = self.sizes.get(i + 1).copied().unwrap_or(0);
+        let (at, off) = (self.diag_at[i], self.off_at[i]);
+        [
+            &mut self.diag[at..at + s * s],
+            &mut self.upper[off..off + s * s1],
+            &mut self.lower[off..off + s * s1],
+        ]
+    }
+
     /// The entry at `(r, c)` within diagonal block `i`.
+    #[cfg(test)]
     pub(super) fn diag_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
         let s = self.sizes[i];
         &mut self.diag[self.diag_at[i] + r * s + c]
     }
 
     /// The entry at `(r, c)` of `U_i`: row `r` of block `i`, column `c` of block `i + 1`.
+    #[cfg(test)]
     pub(super) fn upper_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
         let s = self.sizes[i + 1];
         &mut self.upper[self.off_at[i] + r * s + c]
     }
 
     /// The entry at `(r, c)` of `L_{i+1}`: row `r` of block `i + 1`, column `c` of block `i`.
+    #[cfg(test)]
     pub(super) fn lower_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
         let s = self.sizes[i];
         &mut self.lower[self.off_at[i] + r * s + c]
@@ -99,10 +121,16 @@ impl BlockTridiag {
     pub(super) fn factor(&mut self) -> Result<(), Singular> {
         let n = self.sizes.len();
         for i in 0..n {
+            let (s, at) = (self.sizes[i], self.diag_at[i]);
+            let pair = |j: usize| self.sizes.get(j) == Some(&2);
+            // A joint's block between two joints' (most of a chain's): in 2 by 2 arrays.
+            if i > 0 && pair(i - 1) && pair(i) && (i + 1 == n || pair(i + 1)) {
+                self.factor_pair(i).map_err(|()| Singular { block: i })?;
+                continue;
+            }
             if i > 0 {
                 self.eliminate_lower(i);
             }
-            let (s, at) = (self.sizes[i], self.diag_at[i]);
             invert(&mut self.diag[at..at + s * s], s, &mut self.work)
                 .map_err(|()| Singular { block: i })?;
             if i + 1 < n {
@@ -115,12 +143,62 @@ impl BlockTridiag {
         Ok(())
     }
 
+    /// [`Self::factor`]'s work on block `i`, of size 2 as are its neighbours: the same
+    /// operations in the same order as the general path's, on arrays.
+    fn factor_pair(&mut self, i: usize) -> Result<(), ()> {
+        let (off, at) = (self.off_at[i - 1], self.diag_at[i]);
+        let l = take4(&self.lower[off..]);
+        let w = take4(&self.upper[off..]);
+        let mut d = take4(&self.diag[at..]);
+        for r in 0..2 {
+            for k in 0..2 {
+                let lk = l[2 * r + k];
+                if lk != 0.0 {
+                    d[2 * r] -= lk * w[2 * k];
+                    d[2 * r + 1] -= lk * w[2 * k + 1];
+                }
+            }
+        }
+        let inverse = invert_pair(d)?;
+        self.diag[at..at + 4].copy_from_slice(&inverse);
+        if i + 1 < self.sizes.len() {
+            let off = self.off_at[i];
+            let u = take4(&self.upper[off..]);
+            let mut product = [0.0; 4];
+            for r in 0..2 {
+                for k in 0..2 {
+                    let f = inverse[2 * r + k];
+                    if f != 0.0 {
+                        product[2 * r] += f * u[2 * k];
+                        product[2 * r + 1] += f * u[2 * k + 1];
+                    }
+                }
+            }
+            self.upper[off..off + 4].copy_from_slice(&product);
+        }
+        Ok(())
+    }
+
     /// Solves the factorised system for `b`, which becomes the solution.
     pub(super) fn solve(&self, b: &mut [f64]) {
         let n = self.sizes.len();
         let mut z = [0.0; MAX_INLINE];
         for i in 0..n {
             let (s, at, row) = (self.sizes[i], self.diag_at[i], self.row_at[i]);
+            if s == 2 && i > 0 && self.sizes[i - 1] == 2 {
+                // Between two joints' blocks: the same sums, on arrays.
+                let (off, prev) = (self.off_at[i - 1], self.row_at[i - 1]);
+                let l = take4(&self.lower[off..]);
+                let x = [b[prev], b[prev + 1]];
+                let y = [
+                    b[row] - (l[0] * x[0] + l[1] * x[1]),
+                    b[row + 1] - (l[2] * x[0] + l[3] * x[1]),
+                ];
+                let d = take4(&self.diag[at..]);
+                b[row] = d[0] * y[0] + d[1] * y[1];
+                b[row + 1] = d[2] * y[0] + d[3] * y[1];
+                continue;
+            }
             if i > 0 {
                 let (s0, off, prev) = (self.sizes[i - 1], self.off_at[i - 1], self.row_at[i - 1]);
                 for r in 0..s {
@@ -153,6 +231,13 @@ impl BlockTridiag {
         for i in (0..n.saturating_sub(1)).rev() {
             let (s, s1, off) = (self.sizes[i], self.sizes[i + 1], self.off_at[i]);
             let (row, next) = (self.row_at[i], self.row_at[i + 1]);
+            if s == 2 && s1 == 2 {
+                let w = take4(&self.upper[off..]);
+                let x = [b[next], b[next + 1]];
+                b[row] -= w[0] * x[0] + w[1] * x[1];
+                b[row + 1] -= w[2] * x[0] + w[3] * x[1];
+                continue;
+            }
             for r in 0..s {
                 let w = &self.upper[off + r * s1..off + (r + 1) * s1];
                 let dot: f64 = w.iter().zip(&b[next..next + s1]).map(|(a, x)| a * x).sum();
@@ -200,13 +285,8 @@ fn invert(a: &mut [f64], n: usize, work: &mut Vec<f64>) -> Result<(), ()> {
         return Ok(());
     }
     if n == 2 {
-        let det = a[0] * a[3] - a[1] * a[2];
-        let pivot = a[0].abs().max(a[2].abs());
-        if pivot <= SINGULAR * scale || det.abs() <= SINGULAR * scale * pivot {
-            return Err(());
-        }
-        let [p, q, r, t] = [a[0], a[1], a[2], a[3]];
-        a.copy_from_slice(&[t / det, -q / det, -r / det, p / det]);
+        let inverse = invert_pair(take4(a))?;
+        a.copy_from_slice(&inverse);
         return Ok(());
     }
     // Gauss-Jordan on [a | I], the right half kept in `work` row by row.
@@ -248,6 +328,27 @@ fn invert(a: &mut [f64], n: usize, work: &mut Vec<f64>) -> Result<(), ()> {
     Ok(())
 }
 
+/// The first four entries of `a`.
+fn take4(a: &[f64]) -> [f64; 4] {
+    [a[0], a[1], a[2], a[3]]
+}
+
+/// The inverse of the 2 by 2 row-major matrix `a`, in closed form; fails as [`invert`]
+/// does.
+fn invert_pair(a: [f64; 4]) -> Result<[f64; 4], ()> {
+    let scale = a.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(());
+    }
+    let det = a[0] * a[3] - a[1] * a[2];
+    let pivot = a[0].abs().max(a[2].abs());
+    if pivot <= SINGULAR * scale || det.abs() <= SINGULAR * scale * pivot {
+        return Err(());
+    }
+    let [p, q, r, t] = a;
+    Ok([t / det, -q / det, -r / det, p / det])
+}
+
 /// `b <- a b` for the `n` by `n` matrix `a` and the `n` by `m` matrix `b`, row-major.
 fn multiply_in_place(a: &[f64], n: usize, b: &mut [f64], m: usize, work: &mut Vec<f64>) {
     work.clear();
@@ -280,12 +381,18 @@ mod tests {
 
     #[test]
     fn solves_a_block_tridiagonal_system_as_a_dense_one_does() {
-        let sizes = [2, 3, 1, 4, 2, 2];
+        // Mixed sizes, and a pinned chain's (its first block the pin's and a joint's, then
+        // joints' pairs), which takes the 2 by 2 path.
+        solves_as_dense(&[2, 3, 1, 4, 2, 2], 7);
+        solves_as_dense(&[4, 2, 2, 2, 2, 3, 2, 2, 2], 11);
+        solves_as_dense(&[2; 12], 13);
+    }
+
+    fn solves_as_dense(sizes: &[usize], mut seed: u64) {
         let n: usize = sizes.iter().sum();
-        let mut seed = 7;
         let mut dense = vec![vec![0.0; n]; n];
         let mut system = BlockTridiag::default();
-        system.reset(&sizes);
+        system.reset(sizes);
         for i in 0..sizes.len() {
             let at = system.row_at(i);
             for r in 0..sizes[i] {

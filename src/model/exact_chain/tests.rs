@@ -281,3 +281,41 @@ fn a_long_chain_sliding_flat_on_a_frictionless_floor_keeps_its_speed_and_carries
         );
     }
 }
+
+#[test]
+fn a_body_touches_a_floor_only_at_its_hull_s_corners() {
+    // A square with a point inside it and one on each of two edges; a point given twice.
+    let square = [
+        [0.0, 0.0],
+        [1.0, 0.0],
+        [0.5, 0.5],
+        [1.0, 1.0],
+        [0.5, 0.0],
+        [0.0, 1.0],
+        [0.0, 0.5],
+        [1.0, 1.0],
+    ];
+    let corners = hull_corners(&square);
+    let kept: Vec<usize> = (0..square.len()).filter(|&i| corners[i]).collect();
+    assert_eq!(
+        kept,
+        [0, 1, 3, 5],
+        "each corner once, nothing inside or on an edge"
+    );
+    // Points in a line: its two ends. One point, or two: themselves.
+    let line: Vec<[f64; 2]> = (0..6).map(|i| [0.1 * f64::from(i), 0.2]).collect();
+    assert_eq!(
+        hull_corners(&line),
+        [true, false, false, false, false, true]
+    );
+    assert_eq!(hull_corners(&[[1.0, 2.0]]), [true]);
+    assert_eq!(hull_corners(&[[1.0, 2.0], [1.0, 2.0]]), [true, false]);
+    // A curled piece: every point of a half turn's arc is a corner.
+    let arc: Vec<[f64; 2]> = (0..9)
+        .map(|i| {
+            let a = std::f64::consts::PI * f64::from(i) / 8.0;
+            [a.cos(), a.sin()]
+        })
+        .collect();
+    assert!(hull_corners(&arc).iter().all(|&c| c));
+}

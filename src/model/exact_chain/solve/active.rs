@@ -60,8 +60,7 @@ pub(super) fn solve(
     if chain.joints.is_empty() && chain.pin.is_none() {
         s.held.clone_from(&s.free);
     } else {
-        rows::build(chain, s, Stage::Impulses, &[]);
-        rows::solve(chain, s)?;
+        rows::solve_held(chain, s)?;
         rows::apply(s);
         s.held.clone_from(&s.v);
     }

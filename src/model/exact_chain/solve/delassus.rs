@@ -16,7 +16,7 @@
 //! impulses applied.
 
 use super::super::{ExactChain, StepError, StepReport};
-use super::rows::{self, Stage, along, dot3};
+use super::rows::{self, along, dot3};
 use super::{Scratch, position_tolerance};
 
 /// The contacts are solved when a sweep moves none of their velocities by more than this
@@ -36,8 +36,7 @@ pub(super) fn solve(chain: &mut ExactChain, s: &mut Scratch) -> Result<StepRepor
     s.base.clone_from(&s.free);
     let held = !(chain.joints.is_empty() && chain.pin.is_none());
     if held {
-        rows::build(chain, s, Stage::Impulses, &[]);
-        rows::solve(chain, s)?;
+        rows::solve_held(chain, s)?;
         rows::apply(s);
     } else {
         s.rows.clear();

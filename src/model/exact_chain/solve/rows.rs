@@ -275,30 +275,67 @@ fn coupling(r: &Row, c: &Row, inv: &[[f64; 3]]) -> f64 {
     sum
 }
 
+/// The joints held at the bodies' pose, with no contact ([`Stage::Impulses`] with no extra
+/// rows), built and solved into `x` against `s.base` as [`build`] and [`solve`] would. The
+/// system's factorisation is kept with the bodies' poses and masses it was made at, and a
+/// later call at the same ones (the next stage's impulses at the same pose: the end of one
+/// step and the start of the next, or a stage's passes) solves with it again.
+pub(super) fn solve_held(chain: &mut ExactChain, s: &mut Scratch) -> Result<(), StepError> {
+    build(chain, s, Stage::Impulses, &[]);
+    let key = |b: &super::super::Body| {
+        let [x, y] = b.position_m;
+        [x, y, b.angle_rad, b.mass_kg, b.inertia_kg_m2]
+    };
+    if s.held_valid && s.held_key.iter().copied().eq(chain.bodies.iter().map(key)) {
+        s.x.clear();
+        s.x.extend(s.rows.iter().map(|r| r.rhs));
+        chain.system.solve(&mut s.x);
+        return finite(s);
+    }
+    solve(chain, s)?;
+    s.held_key.clear();
+    s.held_key.extend(chain.bodies.iter().map(key));
+    s.held_valid = true;
+    Ok(())
+}
+
+fn finite(s: &Scratch) -> Result<(), StepError> {
+    if s.x.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(StepError::NonFinite)
+    }
+}
+
 /// Fills the block-tridiagonal system from the rows, factorises it, and solves it into `x`.
 pub(super) fn solve(chain: &mut ExactChain, s: &mut Scratch) -> Result<(), StepError> {
+    s.held_valid = false;
     let system = &mut chain.system;
     system.reset(&s.sizes);
     let blocks = s.sizes.len();
     for i in 0..blocks {
-        let at = system.row_at(i);
-        let size = system.size(i);
-        for r in 0..size {
-            let row = &s.rows[at + r];
-            for c in 0..size {
-                let mut a = coupling(row, &s.rows[at + c], &s.inv);
+        let (at, size) = (system.row_at(i), system.size(i));
+        let (next, next_size) = if i + 1 < blocks {
+            (system.row_at(i + 1), system.size(i + 1))
+        } else {
+            (0, 0)
+        };
+        let [diag, upper, lower] = system.blocks_mut(i);
+        let own = &s.rows[at..at + size];
+        let others = &s.rows[next..next + next_size];
+        for (r, row) in own.iter().enumerate() {
+            for (c, col) in own.iter().enumerate() {
+                let mut a = coupling(row, col, &s.inv);
                 if r == c {
                     a += row.reg;
                 }
-                *system.diag_mut(i, r, c) = a;
+                diag[r * size + c] = a;
             }
             // Only a row on the next body (a joint's) reaches the next block.
-            if i + 1 < blocks && row.count == 2 {
-                let next = system.row_at(i + 1);
-                for c in 0..system.size(i + 1) {
-                    let other = &s.rows[next + c];
-                    *system.upper_mut(i, r, c) = coupling(row, other, &s.inv);
-                    *system.lower_mut(i, c, r) = coupling(other, row, &s.inv);
+            if row.count == 2 {
+                for (c, other) in others.iter().enumerate() {
+                    upper[r * next_size + c] = coupling(row, other, &s.inv);
+                    lower[c * size + r] = coupling(other, row, &s.inv);
                 }
             }
         }
@@ -309,16 +346,40 @@ pub(super) fn solve(chain: &mut ExactChain, s: &mut Scratch) -> Result<(), StepE
     s.x.clear();
     s.x.extend(s.rows.iter().map(|r| r.rhs));
     system.solve(&mut s.x);
-    if s.x.iter().all(|x| x.is_finite()) {
-        Ok(())
-    } else {
-        Err(StepError::NonFinite)
-    }
+    finite(s)
 }
 
 /// The iterate's velocity from the impulses `x`: `v = v_base + M^-1 d^T x`.
 pub(super) fn apply(s: &mut Scratch) {
     s.v.clone_from(&s.base);
+    add_impulses(s);
+}
+
+/// The drift's right-hand sides for a chord iteration, into `s.x`: each row's gap at the
+/// iterate's predicted end (`s.end_pose`) over the step, negated, in the rows' order of
+/// [`build`] for [`Stage::Drift`] (the pin's, then each joint's; `x` then `y`). With the
+/// factorisation of an earlier iterate, `x` solved from them is the impulses' change.
+pub(super) fn drift_gaps(chain: &ExactChain, s: &mut Scratch, h: f64) {
+    s.x.clear();
+    if let Some(pin) = chain.pin
+        && !chain.bodies.is_empty()
+    {
+        let p = s.end_pose.point(0, pin.anchor);
+        s.x.extend([0, 1].map(|c| -(p[c] - pin.at_m[c]) / h));
+    }
+    for (i, jt) in chain.joints.iter().enumerate() {
+        let (pa, pb) = (
+            s.end_pose.point(i, jt.prev),
+            s.end_pose.point(i + 1, jt.next),
+        );
+        s.x.extend([0, 1].map(|c| -(pa[c] - pb[c]) / h));
+    }
+    debug_assert_eq!(s.x.len(), s.rows.len(), "the drift's rows, in order");
+}
+
+/// Adds the impulses `x` along the rows' directions to the iterate's velocity:
+/// `v += M^-1 d^T x`.
+pub(super) fn add_impulses(s: &mut Scratch) {
     for (r, &x) in s.rows.iter().zip(&s.x) {
         for a in 0..r.count {
             let (b, d) = (r.body[a], r.d[a]);
