@@ -66,6 +66,10 @@ pub(super) fn solve(
     }
     let mut set = ActiveSet::new(floor, s);
     let (mut fewest, mut stale) = (usize::MAX, 0);
+    // The modes of each single-pivot pass since the fewest broken last fell: met again,
+    // the passes are in a cycle that would run to MAX_PASSES (each pass repeats the one
+    // after its first visit), so the stage goes to Gauss-Seidel at once.
+    let mut visited: Vec<Vec<Mode>> = Vec::new();
     for pass in 1..=MAX_PASSES {
         set.rows(s);
         rows::build(chain, s, Stage::Impulses, &set.extra);
@@ -85,10 +89,15 @@ pub(super) fn solve(
         // a frictionless floor, where the regularised matrix is positive definite).
         if broken.len() < fewest {
             (fewest, stale) = (broken.len(), 0);
+            visited.clear();
         } else {
             stale += 1;
         }
         if stale >= STALE_PASSES {
+            if visited.contains(&set.modes) {
+                return Ok(None);
+            }
+            visited.push(set.modes.clone());
             broken.drain(..broken.len() - 1);
         }
         for (i, mode) in broken {
