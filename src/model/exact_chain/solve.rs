@@ -48,10 +48,9 @@ pub(super) struct Scratch {
     saved: Vec<super::Body>,
     /// Each contact point's height above the floor at the step's start (m).
     start_gaps: Vec<f64>,
-    /// Whether `ExactChain::system` holds the factorisation of the joints held with no
-    /// contact ([`rows::solve_held`]), and each body's position, angle, mass and inertia
-    /// it was made at.
-    held_valid: bool,
+    /// Where `ExactChain::system` holds the factorisation of the joints held with no
+    /// contact ([`rows::solve_held`]), each body's position, angle, mass and inertia it was
+    /// made at; empty where it holds another.
     held_key: Vec<[f64; 5]>,
 }
 
@@ -200,9 +199,7 @@ fn drift(
         if factored && gap <= CHORD_CONTRACTION * last_gap {
             rows::drift_gaps(chain, s, h);
             chain.system.solve(&mut s.x);
-            if !s.x.iter().all(|x| x.is_finite()) {
-                return Err(StepError::NonFinite);
-            }
+            rows::finite(s)?;
             rows::add_impulses(s);
         } else {
             rows::build(chain, s, Stage::Drift(h), &[]);

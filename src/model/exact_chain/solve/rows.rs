@@ -286,20 +286,19 @@ pub(super) fn solve_held(chain: &mut ExactChain, s: &mut Scratch) -> Result<(), 
         let [x, y] = b.position_m;
         [x, y, b.angle_rad, b.mass_kg, b.inertia_kg_m2]
     };
-    if s.held_valid && s.held_key.iter().copied().eq(chain.bodies.iter().map(key)) {
+    if !s.held_key.is_empty() && s.held_key.iter().copied().eq(chain.bodies.iter().map(key)) {
         s.x.clear();
         s.x.extend(s.rows.iter().map(|r| r.rhs));
         chain.system.solve(&mut s.x);
         return finite(s);
     }
     solve(chain, s)?;
-    s.held_key.clear();
     s.held_key.extend(chain.bodies.iter().map(key));
-    s.held_valid = true;
     Ok(())
 }
 
-fn finite(s: &Scratch) -> Result<(), StepError> {
+/// Whether every impulse of the solve is finite.
+pub(super) fn finite(s: &Scratch) -> Result<(), StepError> {
     if s.x.iter().all(|x| x.is_finite()) {
         Ok(())
     } else {
@@ -309,7 +308,7 @@ fn finite(s: &Scratch) -> Result<(), StepError> {
 
 /// Fills the block-tridiagonal system from the rows, factorises it, and solves it into `x`.
 pub(super) fn solve(chain: &mut ExactChain, s: &mut Scratch) -> Result<(), StepError> {
-    s.held_valid = false;
+    s.held_key.clear();
     let system = &mut chain.system;
     system.reset(&s.sizes);
     let blocks = s.sizes.len();
