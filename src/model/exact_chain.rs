@@ -448,7 +448,7 @@ impl ExactChain {
     ) -> Result<StepReport, StepError> {
         const MAX_DEPTH: u32 = 10;
         let (bodies, warm) = (self.bodies.clone(), self.warm.clone());
-        let result = solve::step(self, h, gravity);
+        let result = solve::step(self, h, gravity, depth < MAX_DEPTH);
         // A contact solve that missed its tolerance is counted, not halved: a shorter step
         // does not make a stiff contact set converge. But a step that leaves a joint open
         // wider than the contacts' slop (the projection out of the floor could not hold

@@ -145,6 +145,23 @@ fn pendulum_energy_error(h: f64) -> f64 {
     worst / most
 }
 
+/// A step whose drift turns a link too far is taken again as two halves; the attempt it
+/// gave up leaves nothing behind, so the chain ends exactly where two half steps take it.
+#[test]
+fn a_step_too_long_for_the_drift_is_two_half_steps_exactly() {
+    // The fastest link spins at 330 rad/s: 0.66 rad in 2 ms, more than the 0.3 allowed.
+    let h = 2e-3;
+    let mut whole = spinning_and_flexing();
+    let report = whole.step(h, [0.0, -9.81]).expect("solves");
+    assert!(report.pieces > 1, "{report:?}");
+    let mut halves = spinning_and_flexing();
+    for _ in 0..2 {
+        halves.step(0.5 * h, [0.0, -9.81]).expect("solves");
+    }
+    assert_eq!(whole.bodies(), halves.bodies());
+    assert!(whole.joint_gap_m() <= whole.position_tolerance_m());
+}
+
 #[test]
 fn a_pinned_chain_s_energy_error_is_of_second_order_in_the_step() {
     let coarse = pendulum_energy_error(4e-4);
