@@ -440,6 +440,12 @@ impl ExactChain {
         self.step_within(h, gravity, 0)
     }
 
+    /// Whether a step's drift may stand: it closed the joints and turned no body further
+    /// than [`Tolerance::max_turn_rad`]. A step whose drift may not is taken again in halves.
+    fn drift_holds(&self, r: &StepReport) -> bool {
+        r.drift_closed && r.max_turn_rad <= self.tolerance.max_turn_rad
+    }
+
     fn step_within(
         &mut self,
         h: f64,
@@ -454,9 +460,7 @@ impl ExactChain {
         // wider than the contacts' slop (the projection out of the floor could not hold
         // them: a step that took many points deep at once) is taken again in halves.
         let open = solve::SLOP * self.tolerance.position_m;
-        let fits = |r: &StepReport| {
-            r.drift_closed && r.max_turn_rad <= self.tolerance.max_turn_rad && r.joint_gap_m <= open
-        };
+        let fits = |r: &StepReport| self.drift_holds(r) && r.joint_gap_m <= open;
         match result {
             Ok(report) if fits(&report) || depth >= MAX_DEPTH => {
                 self.fresh = false;

@@ -106,7 +106,7 @@ fn stages(
     report.drift_closed = closed;
     report.pieces = 1;
     report.max_turn_rad = s.drift.iter().map(|v| (h * v[2]).abs()).fold(0.0, f64::max);
-    if may_halve && !(closed && report.max_turn_rad <= chain.tolerance.max_turn_rad) {
+    if may_halve && !chain.drift_holds(&report) {
         return Ok(report);
     }
     // Move to the end, then the second half kick, and the impulses there.
