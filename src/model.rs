@@ -35,11 +35,12 @@ use crate::scene::{BangEngine, Scene};
 use crate::spiral::{Placed, Spiral, SpiralMoments, rotate};
 
 mod bang;
+mod blocks;
 mod build;
 pub mod exact_chain;
-
 pub mod folded;
 mod impulses;
+pub mod nodal;
 mod observe;
 mod parts;
 mod shed;

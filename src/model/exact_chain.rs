@@ -55,9 +55,7 @@
 //! (1994); K. G. Murty, "Note on a Bard-type scheme for solving the complementarity
 //! problem", Opsearch 11, 123 (1974).
 
-mod blocks;
-
-use blocks::BlockTridiag;
+use super::blocks::BlockTridiag;
 
 /// The compliance of a point moved out of the floor, relative to its own inverse effective
 /// mass: it keeps the position projection's system regular when such points are redundant

@@ -10,9 +10,9 @@
 //!   iterate's predicted pose and its impulse along the start's (Newton's method, SHAKE);
 //! - the projection: joints closed and points out of the floor by a move of the bodies.
 
-use super::super::blocks::Singular;
 use super::super::{ExactChain, REGULARISATION, StepError};
 use super::Scratch;
+use crate::model::blocks::Singular;
 
 /// One row of the constraints on one or two bodies, `rhs` its target less what the base
 /// velocity already gives it.

@@ -19,7 +19,7 @@ const SINGULAR: f64 = 1e-13;
 
 /// The system's blocks, reused from solve to solve (nothing is allocated once grown).
 #[derive(Debug, Default)]
-pub(super) struct BlockTridiag {
+pub(in crate::model) struct BlockTridiag {
     sizes: Vec<usize>,
     /// First unknown of each block.
     row_at: Vec<usize>,
@@ -35,13 +35,13 @@ pub(super) struct BlockTridiag {
 
 /// The system could not be solved: block `block`'s pivot vanished.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) struct Singular {
-    pub(super) block: usize,
+pub(in crate::model) struct Singular {
+    pub(in crate::model) block: usize,
 }
 
 impl BlockTridiag {
     /// Sets the block sizes and zeroes every block.
-    pub(super) fn reset(&mut self, sizes: &[usize]) {
+    pub(in crate::model) fn reset(&mut self, sizes: &[usize]) {
         if self.sizes == sizes {
             self.diag.fill(0.0);
             self.upper.fill(0.0);
@@ -72,18 +72,18 @@ impl BlockTridiag {
     }
 
     /// Block `i`'s first unknown.
-    pub(super) fn row_at(&self, i: usize) -> usize {
+    pub(in crate::model) fn row_at(&self, i: usize) -> usize {
         self.row_at[i]
     }
 
     /// Block `i`'s size.
-    pub(super) fn size(&self, i: usize) -> usize {
+    pub(in crate::model) fn size(&self, i: usize) -> usize {
         self.sizes[i]
     }
 
     /// Block `i`'s diagonal block, and `U_i` and `L_{i+1}` (empty for the last block), each
     /// row-major.
-    pub(super) fn blocks_mut(&mut self, i: usize) -> [&mut [f64]; 3] {
+    pub(in crate::model) fn blocks_mut(&mut self, i: usize) -> [&mut [f64]; 3] {
         let s = self.sizes[i];
         let s1 = self.sizes.get(i + 1).copied().unwrap_or(0);
         let (at, off) = (self.diag_at[i], self.off_at[i]);
@@ -95,30 +95,43 @@ impl BlockTridiag {
     }
 
     /// The entry at `(r, c)` within diagonal block `i`.
-    #[cfg(test)]
-    pub(super) fn diag_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
+    pub(in crate::model) fn diag_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
         let s = self.sizes[i];
         &mut self.diag[self.diag_at[i] + r * s + c]
     }
 
     /// The entry at `(r, c)` of `U_i`: row `r` of block `i`, column `c` of block `i + 1`.
-    #[cfg(test)]
-    pub(super) fn upper_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
+    pub(in crate::model) fn upper_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
         let s = self.sizes[i + 1];
         &mut self.upper[self.off_at[i] + r * s + c]
     }
 
     /// The entry at `(r, c)` of `L_{i+1}`: row `r` of block `i + 1`, column `c` of block `i`.
-    #[cfg(test)]
-    pub(super) fn lower_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
+    pub(in crate::model) fn lower_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
         let s = self.sizes[i];
         &mut self.lower[self.off_at[i] + r * s + c]
+    }
+
+    /// The entry in row `r` of block `bi` and column `c` of block `bj`, which must be the
+    /// same block or a neighbour.
+    ///
+    /// # Panics
+    /// If the blocks are not neighbours.
+    pub(in crate::model) fn entry(&mut self, bi: usize, r: usize, bj: usize, c: usize) -> &mut f64 {
+        if bi == bj {
+            self.diag_mut(bi, r, c)
+        } else if bj == bi + 1 {
+            self.upper_mut(bi, r, c)
+        } else {
+            assert_eq!(bi, bj + 1, "block {bi} and block {bj} are not neighbours");
+            self.lower_mut(bj, r, c)
+        }
     }
 
     /// Factorises the system in place: each diagonal block becomes the inverse of its Schur
     /// complement, each `U_i` becomes `D_i^-1 U_i`. Fill the blocks again (after `reset`)
     /// before the next factorisation.
-    pub(super) fn factor(&mut self) -> Result<(), Singular> {
+    pub(in crate::model) fn factor(&mut self) -> Result<(), Singular> {
         let n = self.sizes.len();
         for i in 0..n {
             let (s, at) = (self.sizes[i], self.diag_at[i]);
@@ -180,7 +193,7 @@ impl BlockTridiag {
     }
 
     /// Solves the factorised system for `b`, which becomes the solution.
-    pub(super) fn solve(&self, b: &mut [f64]) {
+    pub(in crate::model) fn solve(&self, b: &mut [f64]) {
         let n = self.sizes.len();
         let mut z = [0.0; MAX_INLINE];
         for i in 0..n {
