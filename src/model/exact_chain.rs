@@ -289,6 +289,10 @@ pub enum StepError {
     /// The solve gave a non-finite impulse or velocity.
     #[error("the exact chain's solve gave a non-finite value")]
     NonFinite,
+    /// A step did not converge, even halved ten times: its Newton iterations, or the
+    /// floor's contacts' modes, never settled.
+    #[error("the exact chain's step did not converge, even halved ten times")]
+    Unconverged,
 }
 
 mod solve;

@@ -144,6 +144,10 @@ pub enum ChainJoints {
     /// one solve a step (`solver.substeps`, `relax_iterations`, `joint_hz` and `contact_hz`
     /// are the engine's and do not apply).
     Exact,
+    /// `"midpoint"`: the nodal chain (`model::nodal`), the links' joint points as the
+    /// unknowns, stepped by the energy-consistent midpoint rule with the floor's contacts in
+    /// the same iterations; the links' rigidity does no work at any step.
+    Midpoint,
 }
 
 /// `[stop]`.
@@ -364,11 +368,12 @@ impl FoldedChain {
                 "impulse" => ChainJoints::Impulse,
                 "multibody" => ChainJoints::Multibody,
                 "exact" => ChainJoints::Exact,
+                "midpoint" => ChainJoints::Midpoint,
                 other => {
                     return Err(invalid(
                         "solver.joints",
                         format!("{other:?}"),
-                        "must be \"impulse\", \"multibody\" or \"exact\"",
+                        "must be \"impulse\", \"multibody\", \"exact\" or \"midpoint\"",
                     ));
                 }
             },

@@ -267,11 +267,12 @@ fn solver(s: &SolverFile, tape: &Tape) -> Result<Solver, SceneError> {
         bang_engine: match s.bang_engine.as_str() {
             "exact" => BangEngine::Exact,
             "rapier" => BangEngine::Rapier,
+            "midpoint" => BangEngine::Midpoint,
             other => {
                 return Err(invalid(
                     "solver.bang_engine",
                     format!("{other:?}"),
-                    "must be \"exact\" or \"rapier\"",
+                    "must be \"exact\", \"midpoint\" or \"rapier\"",
                 ));
             }
         },

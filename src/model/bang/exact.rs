@@ -119,6 +119,9 @@ impl Model {
     /// the kick turns it about a contact point rather than pressing it into the floor, the
     /// end-of-step impulses leave it there, and the piece, at rest, would read a few mm/s.
     pub(in crate::model) fn moved_speed(&self, piece: Piece) -> f64 {
+        if let Some(speed) = self.nodal_moved_speed(piece) {
+            return speed;
+        }
         let body = &self.world.bodies[piece.body];
         let realised = self
             .exact
@@ -145,7 +148,7 @@ impl Model {
 
     /// The pin of the first moving piece, if it has one: its anchor in the world and in the
     /// piece's frame.
-    fn first_pin(&self) -> Option<(Vector, Vector)> {
+    pub(super) fn first_pin(&self) -> Option<(Vector, Vector)> {
         let first = self.chain.free.front()?;
         self.world
             .impulse_joints
@@ -291,7 +294,7 @@ fn engine_state(body: &RigidBody) -> (Pose, Vector, f64) {
 
 /// An engine body as the exact chain holds it, about its centre of mass `centre` (its own
 /// frame).
-fn exact_body(body: &RigidBody, centre: Vector) -> Body {
+pub(super) fn exact_body(body: &RigidBody, centre: Vector) -> Body {
     let pose = body.position();
     let com = pose.transform_point(centre);
     let v = body.linvel();

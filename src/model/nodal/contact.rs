@@ -1,50 +1,67 @@
-//! The floor's contacts in the nodal chain's step: each point's target, its mode (off,
-//! sticking, sliding) chosen within the Newton iterations by Alart and Curnier's rule, the
-//! rows its mode gives, the work its impulses did, and the projection of the points a
-//! landing took below the floor.
+//! The floor's contacts in the nodal chain's step: each point's target, its modes (touching
+//! or not; sticking or sliding), the rows its modes give, the work its impulses did, and the
+//! projection of the points a landing took below the floor.
 //!
-//! A point's normal velocity at the step's end is held at its target where it touches.
-//! With `g` its height above the floor at the step's start (zero within the slop), `s` its
-//! normal velocity there and `h` the step (the midpoint rule moves it by `h (s + w) / 2`
-//! for an end velocity `w`):
+//! A point touches where the step would take it below the floor: with `g` its height above
+//! the floor at the step's start (zero within the slop), `s` its normal velocity there and
+//! `h` the step, the midpoint rule moves it by `h (s + w) / 2` for an end velocity `w`, so
+//! it touches where `w < -2 g / h - s`. Touching, its normal velocity at the step's end is
+//! held at its target:
 //!
 //! ```text
-//! target = min(-2 g / h - s, 0)
+//! target = min(-s, 0)
 //! ```
 //!
-//! Above the floor, a point that would pass it arrives at it (the first term), its work
-//! `-P g / h`; one that would pass it even stopped stops (0: it lands, plastically), its
-//! work `P s / 2` with `s < 0`; on the floor, a point stops (0), or, if it was leaving the
-//! floor and is pulled back, leaves the step as fast as it came (`-s`: no work). So the
-//! floor's normal impulse `P >= 0` never does positive work. A landing moves a point below
-//! the floor by up to `h |s| / 2`; the projection moves it out by position afterwards.
+//! A point that comes down stops (0: it lands, plastically, within the step), its work
+//! `P s / 2` with `s < 0`; one that was leaving the floor and is pulled back leaves the step
+//! as fast as it came (`-s`: no work). So the floor's normal impulse `P >= 0` never does
+//! positive work, and a point that stops can also stick (the target agrees with a piece
+//! whose rigidity leaves the point one way to move, about a pin). A landing moves a point
+//! below the floor by up to `h |s| / 2`, which the projection moves out by position
+//! afterwards; a point that lands from just above stops up to as far above it.
+//!
+//! Friction is Coulomb's, solved as a sequence of Tresca problems (P. D. Panagiotopoulos,
+//! Ing. Arch. 44, 421, 1975): within one linearisation each touching point's friction
+//! bound `B` is fixed (`mu` times its normal impulse at the iterate), a sticking point's
+//! tangential velocity is held at zero and its friction is free within `B`, and a sliding
+//! point's friction is the known impulse `B` against its slip. Every system is then
+//! symmetric and, regularised, definite in its contacts: the modes are those of a convex
+//! problem, settled by block pivoting, then one mode at a time (the last broken, Murty's
+//! rule), which cannot cycle. The bounds follow the normal impulses from one linearisation
+//! to the next, and the step converges when they agree; a sliding point's friction may then
+//! follow its normal impulse within the solve (Newton's step on the bounds' fixed point),
+//! where that keeps the system regular.
 
-use super::newton::{self, ContactRow, REGULARISATION, Scratch};
+use super::ContactImpulse;
+use super::system::{self, Assembly, ContactRow, REGULARISATION, Solution};
 use super::{NodalChain, add, dot, quarter, scale, sub};
 
 /// A contact point closer to the floor than this many position tolerances rests on it.
 const SLOP: f64 = 1000.0;
 
 /// A normal impulse this fraction of the largest below zero lets its contact go; a friction
-/// this fraction beyond its cone makes it slide.
+/// this fraction of the largest beyond its bound makes it slide.
 const SLACK: f64 = 1e-9;
 
-/// A contact point's mode.
+/// A contact point's friction on one linearisation, its bound fixed.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub enum Mode {
-    /// Not touching.
-    #[default]
-    Off,
-    /// Touching, its tangential velocity held at zero.
+pub(super) enum Friction {
+    /// Its tangential velocity held at zero, its friction free within its bound.
     Stick,
-    /// Touching and sliding: its friction impulse `sign * mu` times its normal one.
+    /// Its friction `sign` times its bound, known (0: none, where the bound is zero).
+    #[default]
+    Free,
+    /// See [`Friction::Free`]: `Slide(sign)`.
     Slide(f64),
 }
 
-/// A point's mode and impulses at the end of a step: the next step's first guess.
+/// A point's modes and force at the end of a step: the next step's first guess.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(super) struct Warm {
-    mode: Mode,
+    touching: bool,
+    friction: Friction,
+    /// Its normal impulse per second of step (N).
+    force: f64,
 }
 
 /// A contact point in a step.
@@ -61,21 +78,58 @@ pub(super) struct Point {
     start: [f64; 2],
     /// Its normal velocity's target at the step's end (m/s).
     target: f64,
-    /// Alart and Curnier's factor: about the point's effective mass (kg).
-    mass: f64,
-    mode: Mode,
+    /// The end's normal velocity below which it would end below the floor, or below its
+    /// target if that is lower (m/s): it touches only then.
+    reach: f64,
+    /// Its friction bound on this linearisation (N s).
+    bound: f64,
+    /// Whether its normal velocity is held at its target (its normal impulse free, `>= 0`).
+    touching: bool,
+    /// Whether, sliding, its friction is `mu` times its normal impulse within the solve (its
+    /// column the normal's and the friction's), not its bound.
+    coupled: bool,
+    friction: Friction,
     /// Its normal and friction impulse (N s).
     pub(super) impulse: [f64; 2],
-    /// Its first row among the assembly's contact rows, where it is on.
+    /// Its first row among the assembly's contact rows, where it has one.
     row: usize,
 }
 
-/// Every contact point's data at the step's start (the chain's state), its mode the last
-/// step's.
-pub(super) fn prepare(chain: &NodalChain, s: &mut Scratch, h: f64) {
-    s.points.clear();
+impl Point {
+    /// Its friction's sign where known (sliding, or none).
+    fn known_friction(&self) -> Option<f64> {
+        match self.friction {
+            Friction::Stick => None,
+            Friction::Free => Some(0.0),
+            Friction::Slide(sign) => Some(sign),
+        }
+    }
+}
+
+/// The step's contact points, and the projection's working memory, kept from step to step.
+#[derive(Debug, Default)]
+pub(super) struct Contacts {
+    pub(super) points: Vec<Point>,
+    assembly: Assembly,
+    solution: Solution,
+}
+
+/// The floor's friction coefficient in the step now being taken (0 where it is taken
+/// without friction).
+pub(super) fn friction(chain: &NodalChain) -> f64 {
+    match chain.floor {
+        Some(floor) if !chain.frictionless => floor.friction,
+        _ => 0.0,
+    }
+}
+
+/// Every contact point's data at the step's start (the chain's state), its modes the last
+/// step's and its friction bound from the last step's normal force.
+pub(super) fn prepare(chain: &NodalChain, points: &mut Vec<Point>, h: f64) {
+    points.clear();
     let Some(floor) = chain.floor else { return };
     let (n, t) = (floor.normal, floor.tangent());
+    let mu = friction(chain);
     let slop = SLOP * chain.position_tolerance_m();
     for i in 0..chain.pieces.len() {
         for (vertex, &local) in chain.points(i).iter().enumerate() {
@@ -83,17 +137,31 @@ pub(super) fn prepare(chain: &NodalChain, s: &mut Scratch, h: f64) {
             let gap0 = dot(n, sub(chain.point(i, local), floor.point_m));
             let v = chain.point_velocity(i, local);
             let start = [dot(n, v), dot(t, v)];
-            let reach = if gap0 > slop { gap0 } else { 0.0 };
-            s.points.push(Point {
+            let height = if gap0 > slop { gap0 } else { 0.0 };
+            let warm = chain.warm[index];
+            let target = (-start[0]).min(0.0);
+            // Friction acts on a point that comes down or rests, not on one that was
+            // leaving the floor and is pulled back (its normal impulse only turns it, with no
+            // work: a graze, not a landing).
+            let mu = if target < 0.0 { 0.0 } else { mu };
+            let bound = mu * warm.force * h;
+            points.push(Point {
                 piece: i,
                 vertex,
                 index,
                 local,
                 gap0,
                 start,
-                target: (-2.0 * reach / h - start[0]).min(0.0),
-                mass: 0.5 * chain.pieces[i].mass_kg,
-                mode: chain.warm[index].mode,
+                target,
+                reach: (-2.0 * height / h - start[0]).min(-start[0]).min(0.0),
+                bound,
+                touching: warm.touching,
+                coupled: false,
+                friction: if bound > 0.0 && warm.touching {
+                    warm.friction
+                } else {
+                    Friction::Free
+                },
                 impulse: [0.0; 2],
                 row: 0,
             });
@@ -101,142 +169,227 @@ pub(super) fn prepare(chain: &NodalChain, s: &mut Scratch, h: f64) {
     }
 }
 
-/// The rows of the points that are on, at the iterate's velocities `v`.
+/// The rows of the points, at the iterate's velocities `v`: a touching point's normal row,
+/// a sticking point's tangential row; a sliding point's friction, known, is added to
+/// `node_rhs` (the momentum rows' right-hand side).
 pub(super) fn rows(
     chain: &NodalChain,
     points: &mut [Point],
     v: &[[f64; 2]],
     out: &mut Vec<ContactRow>,
+    node_rhs: &mut [[f64; 2]],
 ) {
     let Some(floor) = chain.floor else { return };
-    let (n, t, mu) = (floor.normal, floor.tangent(), floor.friction);
+    let (n, t, mu) = (floor.normal, floor.tangent(), friction(chain));
     for p in points.iter_mut() {
-        if p.mode == Mode::Off {
-            continue;
-        }
         p.row = out.len();
         let w = super::material(v, p.piece, p.local);
         let reg = REGULARISATION * 4.0 / chain.pieces[p.piece].mass_kg;
-        let row = |read: [f64; 2], act: [f64; 2], target: f64| ContactRow {
+        let row = |dir: [f64; 2], target: f64| ContactRow {
             piece: p.piece,
             local: p.local,
-            read,
-            act,
-            rhs: target - dot(read, w),
+            read: dir,
+            act: dir,
+            rhs: target - dot(dir, w),
             reg,
         };
-        match p.mode {
-            Mode::Off => {}
-            Mode::Stick => out.extend([row(n, n, p.target), row(t, t, 0.0)]),
-            Mode::Slide(sign) => out.push(row(n, add(n, scale(sign * mu, t)), p.target)),
+        if let (true, Friction::Slide(sign)) = (p.coupled, p.friction) {
+            out.push(ContactRow {
+                act: add(n, scale(sign * mu, t)),
+                ..row(n, p.target)
+            });
+            continue;
+        }
+        if p.touching {
+            out.push(row(n, p.target));
+        }
+        match p.known_friction() {
+            None => out.push(row(t, 0.0)),
+            Some(sign) if sign != 0.0 => add_force(p, scale(sign * p.bound, t), node_rhs),
+            Some(_) => {}
         }
     }
 }
 
-/// Reads each point's impulses from the last solve.
-pub(super) fn take_impulses(chain: &NodalChain, s: &mut Scratch) {
-    let mu = chain.floor.map_or(0.0, |f| f.friction);
-    let x = &s.solution.contact;
-    for p in &mut s.points {
-        p.impulse = match p.mode {
-            Mode::Off => [0.0; 2],
-            Mode::Stick => [x[p.row], x[p.row + 1]],
-            Mode::Slide(sign) => [x[p.row], sign * mu * x[p.row]],
+/// Adds the impulse `f` at point `p` to the nodes' vectors `r` (shared between its piece's
+/// nodes as the point's place on the chord shares it).
+fn add_force(p: &Point, f: [f64; 2], r: &mut [[f64; 2]]) {
+    let [alpha, beta] = p.local;
+    let j = quarter(f);
+    r[p.piece] = add(r[p.piece], add(scale(1.0 - alpha, f), scale(beta, j)));
+    r[p.piece + 1] = add(r[p.piece + 1], sub(scale(alpha, f), scale(beta, j)));
+}
+
+/// Couples the friction of the sliding points that touch to their normal impulse within
+/// the solve (or uncouples every point); whether any point's coupling changed.
+pub(super) fn couple(points: &mut [Point], on: bool) -> bool {
+    let mut changed = false;
+    for p in points {
+        let coupled = on
+            && p.touching
+            && p.target == 0.0
+            && matches!(p.friction, Friction::Slide(s) if s != 0.0);
+        changed |= coupled != p.coupled;
+        p.coupled = coupled;
+    }
+    changed
+}
+
+/// Whether any point touches (its normal row is in the system).
+pub(super) fn any_touching(points: &[Point]) -> bool {
+    points.iter().any(|p| p.touching)
+}
+
+/// Reads each point's impulses from the last solve (`mu` the floor's friction).
+pub(super) fn take_impulses(points: &mut [Point], x: &[f64], mu: f64) {
+    for p in points {
+        if let (true, Friction::Slide(sign)) = (p.coupled, p.friction) {
+            p.impulse = [x[p.row], sign * mu * x[p.row]];
+            continue;
+        }
+        let mut row = p.row;
+        let normal = if p.touching {
+            row += 1;
+            x[row - 1]
+        } else {
+            0.0
         };
+        let friction = match p.known_friction() {
+            None => x[row],
+            Some(sign) => sign * p.bound,
+        };
+        p.impulse = [normal, friction];
     }
 }
 
-/// Subtracts the points' impulses from the nodes' momentum residuals `r` (each impulse
-/// shared between its piece's nodes as the point's place on the chord shares it).
+/// Subtracts the points' impulses from the nodes' momentum residuals `r`.
 pub(super) fn subtract_forces(chain: &NodalChain, points: &[Point], r: &mut [[f64; 2]]) {
     let Some(floor) = chain.floor else { return };
     let (n, t) = (floor.normal, floor.tangent());
     for p in points {
-        if p.impulse == [0.0; 2] {
-            continue;
+        if p.impulse != [0.0; 2] {
+            let f = add(scale(p.impulse[0], n), scale(p.impulse[1], t));
+            add_force(p, scale(-1.0, f), r);
         }
-        let f = add(scale(p.impulse[0], n), scale(p.impulse[1], t));
-        let [alpha, beta] = p.local;
-        let j = quarter(f);
-        r[p.piece] = sub(r[p.piece], add(scale(1.0 - alpha, f), scale(beta, j)));
-        r[p.piece + 1] = sub(r[p.piece + 1], sub(scale(alpha, f), scale(beta, j)));
     }
 }
 
-/// The squared misses of the rows of the points that are on, at the velocities `v` (m^2/s^2).
+/// The squared misses of the points' rows at the velocities `v` (m^2/s^2).
 pub(super) fn row_residuals(chain: &NodalChain, points: &[Point], v: &[[f64; 2]]) -> f64 {
     let Some(floor) = chain.floor else { return 0.0 };
     let (n, t) = (floor.normal, floor.tangent());
     let mut sum = 0.0;
     for p in points {
-        if p.mode == Mode::Off {
-            continue;
-        }
         let w = super::material(v, p.piece, p.local);
-        sum += (dot(n, w) - p.target).powi(2);
-        if p.mode == Mode::Stick {
+        if p.touching {
+            sum += (dot(n, w) - p.target).powi(2);
+        }
+        if p.friction == Friction::Stick {
             sum += dot(t, w).powi(2);
         }
     }
     sum
 }
 
-/// Changes the modes the iterate breaks (Alart and Curnier's rule); whether any changed. A
-/// point off goes on where it would end below its target; a point on goes off where its
-/// normal impulse pulls; a sticking point slides where its friction leaves the cone; a
-/// sliding point whose slip runs along its friction sticks, or slides the other way if its
-/// slip is too fast for the cone to stop.
-pub(super) fn select(chain: &NodalChain, s: &mut Scratch, tol_speed: f64) -> bool {
+/// Changes the modes a linear solution (velocities `v`, the points' impulses) breaks, with
+/// the friction bounds fixed, the normal and the friction of a point apart (Tresca's
+/// problem is a convex one in both); returns how many changed. A point off goes on where it
+/// would end below its target, a point on goes off where its normal impulse pulls; a
+/// sticking point slides where its friction passes its bound, a sliding point sticks where
+/// its slip runs along its friction. Every broken mode changes (block pivoting), or where
+/// `single`, the last broken alone (Murty's rule).
+pub(super) fn select(
+    chain: &NodalChain,
+    points: &mut [Point],
+    v: &[[f64; 2]],
+    tol_speed: f64,
+    single: bool,
+) -> usize {
     let Some(floor) = chain.floor else {
-        return false;
+        return 0;
     };
-    let (n, t, mu) = (floor.normal, floor.tangent(), floor.friction);
-    let largest = s
-        .points
+    let (n, t) = (floor.normal, floor.tangent());
+    let largest = points
         .iter()
-        .map(|p| p.impulse[0].abs())
+        .map(|p| p.impulse[0].abs().max(p.impulse[1].abs()))
         .fold(0.0, f64::max);
     let slack = SLACK * largest;
-    let mut changed = false;
-    for p in &mut s.points {
-        let w = super::material(&s.v, p.piece, p.local);
-        let (w_n, w_t) = (dot(n, w), dot(t, w));
+    // (point, whether its normal or its friction breaks, and the mended mode).
+    let mut broken: Vec<(usize, Option<bool>, Option<Friction>)> = Vec::new();
+    for (k, p) in points.iter().enumerate() {
+        let w = super::material(v, p.piece, p.local);
+        let (w_n, slip) = (dot(n, w), dot(t, w));
         let [p_n, p_t] = p.impulse;
-        let next = match p.mode {
-            Mode::Off if w_n < p.target - tol_speed => {
-                if mu > 0.0 {
-                    Mode::Stick
-                } else {
-                    Mode::Slide(0.0)
-                }
-            }
-            Mode::Off => Mode::Off,
-            _ if p_n < -slack => Mode::Off,
-            Mode::Stick if p_t.abs() > mu * p_n + slack => Mode::Slide(p_t.signum()),
-            Mode::Slide(sign) if mu > 0.0 && sign * w_t > tol_speed => {
-                if p.mass * w_t.abs() <= 2.0 * mu * p_n {
-                    Mode::Stick
-                } else {
-                    Mode::Slide(-sign)
-                }
-            }
-            mode => mode,
+        let touching = match p.touching {
+            false if w_n < p.reach - tol_speed => Some(true),
+            true if p_n < -slack => Some(false),
+            _ => None,
         };
-        if next != p.mode {
-            changed = true;
-            p.mode = next;
-            if next == Mode::Off {
-                p.impulse = [0.0; 2];
-            }
+        let friction = match p.friction {
+            _ if p.bound <= 0.0 => (p.friction != Friction::Free).then_some(Friction::Free),
+            Friction::Stick if p_t.abs() > p.bound + slack => Some(Friction::Slide(p_t.signum())),
+            Friction::Free => Some(Friction::Stick),
+            Friction::Slide(sign) if sign * slip > tol_speed => Some(Friction::Stick),
+            _ => None,
+        };
+        if touching.is_some() || friction.is_some() {
+            broken.push((k, touching, friction));
         }
     }
-    changed
+    if single && broken.len() > 1 {
+        broken.drain(..broken.len() - 1);
+    }
+    for &(k, touching, friction) in &broken {
+        let p = &mut points[k];
+        if let Some(on) = touching {
+            p.touching = on;
+        }
+        if let Some(f) = friction {
+            p.friction = f;
+        }
+    }
+    broken.len()
+}
+
+/// Moves each point's friction bound towards `mu` times its normal impulse: a sliding
+/// point's (whose friction is its bound) the fraction `relax` of the way, any other's all of
+/// it. Returns by how much Coulomb's law was missed, over the largest normal impulse (0 if
+/// none pushes): a sliding point's friction against `mu` times its normal impulse, a
+/// sticking point's friction beyond it.
+pub(super) fn update_bounds(chain: &NodalChain, points: &mut [Point], relax: f64) -> f64 {
+    let mu = friction(chain);
+    let (mut miss, mut largest) = (0.0_f64, 0.0_f64);
+    for p in points.iter_mut() {
+        let bound = if p.target < 0.0 {
+            0.0
+        } else {
+            mu * p.impulse[0].max(0.0)
+        };
+        largest = largest.max(p.impulse[0].abs());
+        match p.friction {
+            Friction::Slide(_) if !p.coupled => {
+                miss = miss.max((bound - p.bound).abs());
+                p.bound += relax * (bound - p.bound);
+            }
+            Friction::Stick => {
+                miss = miss.max(p.impulse[1].abs() - bound);
+                p.bound = bound;
+            }
+            _ => p.bound = bound,
+        }
+    }
+    if largest > 0.0 { miss / largest } else { 0.0 }
 }
 
 /// Records the step's contacts with their work (each impulse times its point's mean
 /// velocity over the step), keeps the modes for the next step; returns the normal's and
 /// friction's work (J). The chain's nodes and velocities are the step's end.
-pub(super) fn record(chain: &mut NodalChain, s: &Scratch) -> [f64; 2] {
+pub(super) fn record(
+    chain: &mut NodalChain,
+    points: &[Point],
+    x0: &[[f64; 2]],
+    h: f64,
+) -> [f64; 2] {
     chain.contacts.clear();
     let Some(floor) = chain.floor else {
         return [0.0; 2];
@@ -245,12 +398,16 @@ pub(super) fn record(chain: &mut NodalChain, s: &Scratch) -> [f64; 2] {
     let x_mid: Vec<[f64; 2]> = chain
         .nodes
         .iter()
-        .zip(&s.x0)
+        .zip(x0)
         .map(|(a, b)| scale(0.5, add(*a, *b)))
         .collect();
     let mut total = [0.0; 2];
-    for p in &s.points {
-        chain.warm[p.index] = Warm { mode: p.mode };
+    for p in points {
+        chain.warm[p.index] = Warm {
+            touching: p.touching,
+            friction: p.friction,
+            force: p.impulse[0].max(0.0) / h,
+        };
         if p.impulse == [0.0; 2] {
             continue;
         }
@@ -260,7 +417,7 @@ pub(super) fn record(chain: &mut NodalChain, s: &Scratch) -> [f64; 2] {
             p.impulse[1] * 0.5 * (p.start[1] + dot(t, w)),
         ];
         total = add(total, work);
-        let c = newton::contact_impulse(chain, &x_mid, p, work);
+        let c = contact_impulse(chain, &x_mid, p, work);
         chain.contacts.push(c);
     }
     total
@@ -273,7 +430,9 @@ pub(super) fn record(chain: &mut NodalChain, s: &Scratch) -> [f64; 2] {
 /// converged.
 pub(super) fn project_out(
     chain: &mut NodalChain,
-    s: &mut Scratch,
+    c: &mut Contacts,
+    kick: &[[f64; 2]],
+    h: f64,
 ) -> Result<(f64, bool), super::StepError> {
     let Some(floor) = chain.floor else {
         return Ok((0.0, true));
@@ -289,7 +448,7 @@ pub(super) fn project_out(
     let mut closed = false;
     for _ in 0..chain.tolerance.max_iterations {
         let mut added = false;
-        for (k, p) in s.points.iter().enumerate() {
+        for (k, p) in c.points.iter().enumerate() {
             let floor_at = p.gap0.min(0.0);
             if gap(chain, p) < floor_at - deepest && !deep.iter().any(|d| d.0 == k) {
                 deep.push((k, floor_at));
@@ -304,12 +463,13 @@ pub(super) fn project_out(
         }
         let holds = deep
             .iter()
-            .all(|&(k, at)| (gap(chain, &s.points[k]) - at).abs() <= tol);
+            .all(|&(k, at)| (gap(chain, &c.points[k]) - at).abs() <= tol);
+
         if holds && chain.length_error_m() <= tol {
             closed = true;
             break;
         }
-        let a = &mut s.assembly;
+        let a = &mut c.assembly;
         a.clear(true, chain.pieces.len());
         for (i, p) in chain.pieces.iter().enumerate() {
             let d = sub(chain.nodes[i + 1], chain.nodes[i]);
@@ -324,10 +484,10 @@ pub(super) fn project_out(
             .zip(&before)
             .map(|(x, b)| sub(*x, *b))
             .collect();
-        let pull = newton::times_mass(&chain.pieces, &moved);
+        let pull = system::times_mass(&chain.pieces, &moved);
         a.node_rhs.extend(pull.iter().map(|m| scale(-1.0, *m)));
         for &(k, at) in &deep {
-            let p = &s.points[k];
+            let p = &c.points[k];
             a.contacts.push(ContactRow {
                 piece: p.piece,
                 local: p.local,
@@ -337,18 +497,18 @@ pub(super) fn project_out(
                 reg: REGULARISATION * 4.0 / chain.pieces[p.piece].mass_kg,
             });
         }
-        newton::solve(
+        system::solve(
             &chain.pieces,
             chain.pinned,
             &mut chain.system,
-            &s.assembly,
-            &mut s.solution,
+            &c.assembly,
+            &mut c.solution,
         )?;
-        for (x, d) in chain.nodes.iter_mut().zip(&s.solution.delta) {
+        for (x, d) in chain.nodes.iter_mut().zip(&c.solution.delta) {
             *x = add(*x, *d);
         }
     }
-    let h_f = &s.kick;
+    let h_f = kick;
     // The potential is -f . x, and kick = h f: the step's length cancels in the ratio of
     // the move's work to the kick's (both are read per unit of h below).
     let lift: f64 = chain
@@ -358,13 +518,13 @@ pub(super) fn project_out(
         .zip(h_f)
         .map(|((x, b), k)| -dot(*k, sub(*x, *b)))
         .sum();
-    Ok((lift / s.h, closed))
+    Ok((lift / h, closed))
 }
 
 /// The deepest a contact point lies below the floor (m; 0 if none).
-pub(super) fn penetration(chain: &NodalChain, s: &Scratch) -> f64 {
+pub(super) fn penetration(chain: &NodalChain, points: &[Point]) -> f64 {
     let Some(floor) = chain.floor else { return 0.0 };
-    s.points
+    points
         .iter()
         .map(|p| {
             -dot(
@@ -373,4 +533,28 @@ pub(super) fn penetration(chain: &NodalChain, s: &Scratch) -> f64 {
             )
         })
         .fold(0.0, f64::max)
+}
+
+/// A point's impulses over the step as the chain reports them (`x_mid` the nodes at the
+/// step's midpoint).
+fn contact_impulse(
+    chain: &NodalChain,
+    x_mid: &[[f64; 2]],
+    point: &Point,
+    work_j: [f64; 2],
+) -> ContactImpulse {
+    let floor = chain.floor.expect("contacts need a floor");
+    let (n, t) = (floor.normal, floor.tangent());
+    let p = &chain.pieces[point.piece];
+    let at = super::material(x_mid, point.piece, point.local);
+    let centre = super::material(x_mid, point.piece, p.centre);
+    ContactImpulse {
+        piece: point.piece,
+        vertex: point.vertex,
+        normal_n_s: scale(point.impulse[0], n),
+        friction_n_s: scale(point.impulse[1], t),
+        point_m: at,
+        arm_m: sub(at, centre),
+        work_j,
+    }
 }

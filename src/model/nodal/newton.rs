@@ -1,29 +1,10 @@
 //! The nodal chain's step: Newton's method on the midpoint rule's equations, the floor's
-//! contacts in the same iterations, each iteration one banded solve; and the same banded
-//! system for the projection out of the floor and for the mass matrix alone.
-//!
-//! The system's block `k` holds node `k`'s unknowns after the rows of the piece before it
-//! (its rigidity impulse, then its contact impulses in its points' order), so that every
-//! row touches only its own block and its neighbours':
-//!
-//! ```text
-//! block 0:  v_0                                (none where node 0 is pinned)
-//! block k:  Lambda_{k-1}, P of piece k-1 ..., v_k
-//! ```
-//!
-//! A leading set of blocks is then a sub-chain's whole system, regular wherever its
-//! constraints are independent; redundant contact rows (the points of a piece lying flat)
-//! are regularised by [`REGULARISATION`] of their own inverse mass.
+//! contacts in the same iterations (their modes settled on each linearisation), each
+//! iteration one banded solve (`system.rs`), a line search on a merit where the full step
+//! would overshoot.
 
-use super::contact;
-use super::{
-    ContactImpulse, NodalChain, Piece, StepError, StepReport, add, cross, dot, quarter, scale, sub,
-};
-use crate::model::blocks::{BlockTridiag, Singular};
-
-/// The compliance of a contact row, relative to its own inverse effective mass: it keeps
-/// the system regular where a piece's contact rows and its rigidity are redundant.
-pub(super) const REGULARISATION: f64 = 1e-9;
+use super::system::{Assembly, Solution, solve, times_mass};
+use super::{NodalChain, StepError, StepReport, add, contact, cross, dot, quarter, scale, sub};
 
 /// The step's working memory, kept from step to step.
 #[derive(Debug, Default)]
@@ -40,7 +21,7 @@ pub(in crate::model) struct Scratch {
     pub(super) v: Vec<[f64; 2]>,
     lambda: Vec<f64>,
     /// The contact points' data for the step, their modes and impulses.
-    pub(super) points: Vec<contact::Point>,
+    pub(super) contacts: contact::Contacts,
     pub(super) assembly: Assembly,
     pub(super) solution: Solution,
     /// The line search's iterate before the step, and the solve's impulses.
@@ -48,60 +29,6 @@ pub(in crate::model) struct Scratch {
     trial_lambda: Vec<f64>,
     trial_impulses: Vec<[f64; 2]>,
     new_impulses: Vec<[f64; 2]>,
-}
-
-/// One contact row: the point `local` of `piece`, read along `read`, its impulse acting
-/// along `act`; the row is `read . v_point + reg P = rhs`: a compliance that lets the point
-/// fall short of its target by `reg P`, never pass it, so it takes energy, never gives it.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct ContactRow {
-    pub(super) piece: usize,
-    pub(super) local: [f64; 2],
-    pub(super) read: [f64; 2],
-    pub(super) act: [f64; 2],
-    pub(super) rhs: f64,
-    pub(super) reg: f64,
-}
-
-/// A banded system of the chain: `K dv - sum Lambda_i col_i - C^T P = node_rhs`, with rows
-/// `row_i . (dv_{i+1} - dv_i) = chord_rhs_i` where `rigid`, and the contact rows.
-/// `K = M - sum soft_i H_i`, `H_i` the Hessian of `c_i` (`I` on each node, `-I` across).
-#[derive(Debug, Default)]
-pub(super) struct Assembly {
-    pub(super) rigid: bool,
-    pub(super) soft: Vec<f64>,
-    pub(super) col: Vec<[f64; 2]>,
-    pub(super) row: Vec<[f64; 2]>,
-    pub(super) chord_rhs: Vec<f64>,
-    /// Sorted by piece.
-    pub(super) contacts: Vec<ContactRow>,
-    pub(super) node_rhs: Vec<[f64; 2]>,
-}
-
-impl Assembly {
-    pub(super) fn clear(&mut self, rigid: bool, pieces: usize) {
-        self.rigid = rigid;
-        self.soft.clear();
-        self.soft.resize(pieces, 0.0);
-        self.col.clear();
-        self.row.clear();
-        self.chord_rhs.clear();
-        self.contacts.clear();
-        self.node_rhs.clear();
-    }
-}
-
-/// A solved system: each node's change, each piece's rigidity impulse, each contact row's
-/// impulse.
-#[derive(Debug, Default)]
-pub(super) struct Solution {
-    pub(super) delta: Vec<[f64; 2]>,
-    pub(super) lambda: Vec<f64>,
-    pub(super) contact: Vec<f64>,
-    sizes: Vec<usize>,
-    /// Each piece's first contact row among the assembly's.
-    first_row: Vec<usize>,
-    x: Vec<f64>,
 }
 
 /// The step of [`NodalChain::step`], not halved.
@@ -136,19 +63,24 @@ fn iterate(
         pieces: 1,
         ..StepReport::default()
     };
-    let mut phi = merit(chain, s, h);
     // Iterations in a row whose line search took less than an eighth of Newton's step.
-    let mut stalled = 0;
-    while report.iterations < chain.tolerance.max_iterations && stalled < STALLED {
-        report.iterations += 1;
-        assemble_step(chain, s, h);
-        solve(
-            &chain.pieces,
-            chain.pinned,
-            &mut chain.system,
-            &s.assembly,
-            &mut s.solution,
-        )?;
+    let (mut stalled, mut outer) = (0, 0);
+    // Whether the sliding points' friction may follow their normal impulse within the solve
+    // (Newton's step on the bounds' fixed point), and whether the last linearisation's
+    // modes held from its first pass.
+    let (mut coupling, mut held) = (true, false);
+    // The bounds' step towards the normal impulses, halved whenever their miss does not
+    // shrink (friction lifting a point it then no longer holds, and so on).
+    let (mut relax, mut last_miss) = (1.0, f64::INFINITY);
+    while outer < chain.tolerance.max_iterations && stalled < STALLED {
+        outer += 1;
+        s.trial_impulses.clear();
+        s.trial_impulses
+            .extend(s.contacts.points.iter().map(|p| p.impulse));
+        contact::couple(&mut s.contacts.points, coupling && held);
+        let Some(passes) = settle_modes(chain, s, h, &mut report, &mut coupling)? else {
+            return finish(chain, s, h, kinetic0, report);
+        };
         let widest = s
             .solution
             .delta
@@ -157,19 +89,89 @@ fn iterate(
         if !(widest.is_finite() && s.solution.lambda.iter().all(|x| x.is_finite())) {
             return Err(StepError::NonFinite);
         }
-        let t = line_search(chain, s, h, &mut phi);
+        held = passes == 1;
+        let (t, phi) = line_search(chain, s, h);
         stalled = if t < 0.125 { stalled + 1 } else { 0 };
-        let settled = !contact::select(chain, s, tol / h);
+        // Coupled friction whose Newton step had to be cut (high friction's near-singular
+        // response): the bounds alone from now on.
+        if t < 1.0 && contact::couple(&mut s.contacts.points, false) {
+            coupling = false;
+        }
         let gap = length_errors(chain, s, h);
-        if settled && gap <= tol && t * h * widest <= tol {
+        let bounds_moved = contact::update_bounds(chain, &mut s.contacts.points, relax);
+        if bounds_moved >= last_miss {
+            relax = (0.5 * relax).max(1.0 / 64.0);
+        }
+        last_miss = bounds_moved;
+        // Newton's whole step within the tolerance (the iterate is that close to the
+        // solution of its own linearisation, whose modes the passes settled), and the
+        // friction bounds where the normal impulses put them.
+        // Or, where the floor touches, the iterate's every residual within a hundredth of
+        // the tolerance already: a step that moves along a direction they hardly see (a
+        // point's impulse shared among redundant rows) changes nothing that matters.
+        let settled = contact::any_touching(&s.contacts.points) && phi <= 1e-4 * tol * tol;
+        let small = h * widest <= tol || settled;
+        if gap <= tol && small && bounds_moved <= BOUND_TOLERANCE {
             report.converged = true;
             break;
         }
-        if !settled {
-            phi = merit(chain, s, h);
-        }
     }
     finish(chain, s, h, kinetic0, report)
+}
+
+/// Settles the contacts' modes on the iterate's linearisation, the friction bounds fixed:
+/// each pass one solve, every broken mode changed while fewer break, then one at a time.
+/// Returns the passes taken, or `None` if the modes did not settle within [`MAX_PASSES`].
+/// A singular system with coupled friction (high friction's indeterminacy) turns the
+/// coupling off for the rest of the step (`coupling`).
+fn settle_modes(
+    chain: &mut NodalChain,
+    s: &mut Scratch,
+    h: f64,
+    report: &mut StepReport,
+    coupling: &mut bool,
+) -> Result<Option<u32>, StepError> {
+    let tol_speed = chain.position_tolerance_m() / h;
+    let (mut passes, mut fewest, mut stale) = (0, usize::MAX, 0);
+    loop {
+        report.iterations += 1;
+        passes += 1;
+        assemble_step(chain, s, h);
+        let solved = solve(
+            &chain.pieces,
+            chain.pinned,
+            &mut chain.system,
+            &s.assembly,
+            &mut s.solution,
+        );
+        if solved.is_err() && contact::couple(&mut s.contacts.points, false) {
+            *coupling = false;
+            continue;
+        }
+        solved?;
+        s.trial.clear();
+        s.trial
+            .extend(s.v.iter().zip(&s.solution.delta).map(|(v, d)| add(*v, *d)));
+        contact::take_impulses(
+            &mut s.contacts.points,
+            &s.solution.contact,
+            contact::friction(chain),
+        );
+        let single = stale >= STALE_PASSES;
+        let broken = contact::select(chain, &mut s.contacts.points, &s.trial, tol_speed, single);
+        if broken == 0 {
+            return Ok(Some(passes));
+        }
+        contact::couple(&mut s.contacts.points, false);
+        if broken < fewest {
+            (fewest, stale) = (broken, 0);
+        } else {
+            stale += 1;
+        }
+        if passes >= MAX_PASSES {
+            return Ok(None);
+        }
+    }
 }
 
 /// Iterations in a row whose line search cuts Newton's step below an eighth before the step
@@ -178,18 +180,37 @@ fn iterate(
 /// does so in 3 to 7 iterations.
 const STALLED: u32 = 4;
 
-/// Takes the solve's step from the iterate, shortened by halves (down to 1/64) until it
-/// lowers the merit ([`merit`]) by at least 1e-4 of its share: far from the solution (a
-/// piece turning half a radian a step) the full Newton step can overshoot and cycle.
-/// Returns the fraction taken; `phi` becomes the merit there.
-fn line_search(chain: &NodalChain, s: &mut Scratch, h: f64, phi: &mut f64) -> f64 {
+/// Block-pivoting passes that may go without fewer modes broken before the modes change
+/// one at a time.
+const STALE_PASSES: u32 = 3;
+
+/// The most solves one linearisation's contact modes may take to settle before the step is
+/// given up (and taken again in halves).
+const MAX_PASSES: u32 = 60;
+
+/// How far the friction bounds may be from `mu` times the normal impulses, relative to the
+/// largest normal impulse, when the step converges: Coulomb's law holds to that fraction.
+const BOUND_TOLERANCE: f64 = 1e-6;
+
+/// Takes the solve's step from the iterate (its velocities, rigidity impulses and the
+/// contacts' impulses before this linearisation, `s.trial_impulses`), shortened by halves
+/// (down to 1/64) until it lowers the merit ([`merit`], with the settled modes) by at least
+/// 1e-4 of its share: far from the solution (a piece turning half a radian a step) the full
+/// Newton step can overshoot and cycle. A merit within a quarter of the position tolerance
+/// squared is rounding, and takes the full step. Returns the fraction taken and the merit
+/// before the step.
+fn line_search(chain: &NodalChain, s: &mut Scratch, h: f64) -> (f64, f64) {
+    s.new_impulses.clear();
+    s.new_impulses
+        .extend(s.contacts.points.iter().map(|p| p.impulse));
+    for (p, old) in s.contacts.points.iter_mut().zip(&s.trial_impulses) {
+        p.impulse = *old;
+    }
+    let phi = merit(chain, s, h);
+    // Within the tolerance already, the merit is rounding: the full step is taken.
+    let floor = 0.25 * chain.position_tolerance_m().powi(2);
     s.trial.clone_from(&s.v);
     s.trial_lambda.clone_from(&s.lambda);
-    s.trial_impulses.clear();
-    s.trial_impulses.extend(s.points.iter().map(|p| p.impulse));
-    contact::take_impulses(chain, s);
-    s.new_impulses.clear();
-    s.new_impulses.extend(s.points.iter().map(|p| p.impulse));
     let mut t = 1.0;
     loop {
         for ((v, old), d) in s.v.iter_mut().zip(&s.trial).zip(&s.solution.delta) {
@@ -204,6 +225,7 @@ fn line_search(chain: &NodalChain, s: &mut Scratch, h: f64, phi: &mut f64) -> f6
             *l = old + t * (new - old);
         }
         for ((p, old), new) in s
+            .contacts
             .points
             .iter_mut()
             .zip(&s.trial_impulses)
@@ -211,10 +233,12 @@ fn line_search(chain: &NodalChain, s: &mut Scratch, h: f64, phi: &mut f64) -> f6
         {
             p.impulse = [0, 1].map(|k| old[k] + t * (new[k] - old[k]));
         }
+        if phi <= floor {
+            return (t, phi);
+        }
         let trial = merit(chain, s, h);
-        if trial <= (1.0 - 1e-4 * t) * *phi || t <= 1.0 / 64.0 {
-            *phi = trial;
-            return t;
+        if t <= 1.0 / 64.0 || trial <= (1.0 - 1e-4 * t) * phi {
+            return (t, trial);
         }
         t *= 0.5;
     }
@@ -242,8 +266,8 @@ fn merit(chain: &NodalChain, s: &mut Scratch, h: f64) -> f64 {
         mass[i + 1] += b;
         phi += (0.5 * (dot(end, end) - l * l) / l).powi(2);
     }
-    contact::subtract_forces(chain, &s.points, &mut r);
-    phi += h * h * contact::row_residuals(chain, &s.points, &s.v);
+    contact::subtract_forces(chain, &s.contacts.points, &mut r);
+    phi += h * h * contact::row_residuals(chain, &s.contacts.points, &s.v);
     let first = usize::from(chain.pinned);
     for k in first..r.len() {
         phi += (h / mass[k]).powi(2) * dot(r[k], r[k]);
@@ -275,7 +299,7 @@ fn prepare(chain: &NodalChain, s: &mut Scratch, h: f64, gravity: [f64; 2]) {
         s.lambda.push(chain.tension[i] * h);
     }
     predict(chain, s, h);
-    contact::prepare(chain, s, h);
+    contact::prepare(chain, &mut s.contacts.points, h);
 }
 
 /// The first iterate's end velocities: each piece turned rigidly at its spin as the midpoint
@@ -301,10 +325,17 @@ fn predict(chain: &NodalChain, s: &mut Scratch, h: f64) {
 fn assemble_step(chain: &NodalChain, s: &mut Scratch, h: f64) {
     let mut a = std::mem::take(&mut s.assembly);
     a.clear(true, chain.pieces.len());
+    let touching = contact::any_touching(&s.contacts.points);
     for (i, p) in chain.pieces.iter().enumerate() {
         let l = p.length_m;
         let (mid, end) = chord_ends(s, i, h);
-        a.soft[i] = 0.25 * h * s.lambda[i] / l;
+        // The rigidity's curvature (Newton's exact step). Where the floor touches, only
+        // where it stiffens the system (a piece in tension): in compression it softens it,
+        // and could make the contacts' problem lose its convexity (a point's response to
+        // its own impulse turned against it); there the iterations go on without it
+        // (Newton's chord, slower, to the same solution).
+        let soft = 0.25 * h * s.lambda[i] / l;
+        a.soft[i] = if touching { soft.min(0.0) } else { soft };
         a.col.push(scale(1.0 / l, mid));
         a.row.push(scale(1.0 / l, end));
         a.chord_rhs.push(-(dot(end, end) - l * l) / (h * l));
@@ -315,7 +346,13 @@ fn assemble_step(chain: &NodalChain, s: &mut Scratch, h: f64) {
         let r = sub(add(start[k], s.kick[k]), momentum[k]);
         a.node_rhs.push(r);
     }
-    contact::rows(chain, &mut s.points, &s.v, &mut a.contacts);
+    contact::rows(
+        chain,
+        &mut s.contacts.points,
+        &s.v,
+        &mut a.contacts,
+        &mut a.node_rhs,
+    );
     s.assembly = a;
 }
 
@@ -370,256 +407,14 @@ fn finish(
             .max(cross(d0, d).atan2(dot(d0, d)).abs());
         chain.tension[i] = s.lambda[i] / h;
     }
-    report.floor_work_j = contact::record(chain, s);
+    report.floor_work_j = contact::record(chain, &s.contacts.points, &s.x0, h);
     report.kinetic_change_j = chain.kinetic_j() - kinetic0;
     report.joint_gap_m = chain.length_error_m();
-    let (projection_j, moved) = contact::project_out(chain, s)?;
+    // A projection that cannot meet every point's height (points of one piece that began
+    // the step at different depths below the floor, which the piece's rigidity cannot all
+    // keep) leaves the least-squares compromise: the depth left is reported.
+    let (projection_j, _) = contact::project_out(chain, &mut s.contacts, &s.kick, h)?;
     report.projection_j = projection_j;
-    report.converged &= moved;
-    report.penetration_m = contact::penetration(chain, s);
+    report.penetration_m = contact::penetration(chain, &s.contacts.points);
     Ok(report)
-}
-
-/// Builds the banded system of `a` and solves it into `out`.
-pub(super) fn solve(
-    pieces: &[Piece],
-    pinned: bool,
-    system: &mut BlockTridiag,
-    a: &Assembly,
-    out: &mut Solution,
-) -> Result<(), StepError> {
-    let n = pieces.len() + 1;
-    let first = usize::from(pinned);
-    let rigid = usize::from(a.rigid);
-    // Rows per piece, and where each piece's start among the contact rows.
-    out.first_row.clear();
-    let mut at = 0;
-    for i in 0..pieces.len() {
-        out.first_row.push(at);
-        while at < a.contacts.len() && a.contacts[at].piece == i {
-            at += 1;
-        }
-    }
-    out.first_row.push(at);
-    let rows = |i: usize| out.first_row[i + 1] - out.first_row[i];
-    // Node k's block, and its velocity's offset in it.
-    let block = |k: usize| k - first;
-    let vel_at = |k: usize| if k == 0 { 0 } else { rigid + rows(k - 1) };
-    out.sizes.clear();
-    out.sizes.extend((first..n).map(|k| vel_at(k) + 2));
-    system.reset(&out.sizes);
-    let free = |k: usize| k >= first;
-    // The mass matrix, softened by the rigidity's curvature.
-    for (i, p) in pieces.iter().enumerate() {
-        let [ma, mb, mc, me] = p.mass_blocks();
-        let soft = a.soft[i];
-        let near = [[ma - soft, 0.0], [0.0, ma - soft]];
-        let far = [[mb - soft, 0.0], [0.0, mb - soft]];
-        let across = [[mc + soft, -me], [me, mc + soft]];
-        let back = [[mc + soft, me], [-me, mc + soft]];
-        for (ka, kb, m) in [
-            (i, i, near),
-            (i + 1, i + 1, far),
-            (i, i + 1, across),
-            (i + 1, i, back),
-        ] {
-            if free(ka) && free(kb) {
-                for (r, row) in m.iter().enumerate() {
-                    for (c, &v) in row.iter().enumerate() {
-                        *system.entry(block(ka), vel_at(ka) + r, block(kb), vel_at(kb) + c) += v;
-                    }
-                }
-            }
-        }
-    }
-    // Each piece's rigidity (offset 0 of the far node's block) and contacts.
-    for i in 0..pieces.len() {
-        let b = block(i + 1);
-        if a.rigid {
-            couple(
-                system,
-                (b, 0),
-                [(i, -1.0), (i + 1, 1.0)],
-                &free,
-                &block,
-                &vel_at,
-                |_, s| (scale(-s, a.col[i]), scale(s, a.row[i])),
-            );
-        }
-        for (r, c) in a.contacts[out.first_row[i]..out.first_row[i + 1]]
-            .iter()
-            .enumerate()
-        {
-            let unknown = (b, rigid + r);
-            let [alpha, beta] = c.local;
-            let weights = |dir: [f64; 2], node: usize| {
-                let j = quarter(dir);
-                if node == i {
-                    add(scale(1.0 - alpha, dir), scale(beta, j))
-                } else {
-                    sub(scale(alpha, dir), scale(beta, j))
-                }
-            };
-            couple(
-                system,
-                unknown,
-                [(i, 0.0), (i + 1, 0.0)],
-                &free,
-                &block,
-                &vel_at,
-                |k, _| (scale(-1.0, weights(c.act, k)), weights(c.read, k)),
-            );
-            *system.entry(b, rigid + r, b, rigid + r) += c.reg;
-        }
-    }
-    // The right-hand side, in the blocks' order.
-    out.x.clear();
-    for k in first..n {
-        if k > 0 {
-            if a.rigid {
-                out.x.push(a.chord_rhs[k - 1]);
-            }
-            out.x.extend(
-                a.contacts[out.first_row[k - 1]..out.first_row[k]]
-                    .iter()
-                    .map(|c| c.rhs),
-            );
-        }
-        out.x.extend(a.node_rhs[k]);
-    }
-    system
-        .factor()
-        .map_err(|Singular { block }| StepError::Singular { block })?;
-    system.solve(&mut out.x);
-    if !out.x.iter().all(|x| x.is_finite()) {
-        return Err(StepError::NonFinite);
-    }
-    // Read the unknowns back.
-    out.delta.clear();
-    out.delta.resize(n, [0.0; 2]);
-    out.lambda.clear();
-    out.lambda.resize(pieces.len(), 0.0);
-    out.contact.clear();
-    out.contact.resize(a.contacts.len(), 0.0);
-    for k in first..n {
-        let start = system.row_at(block(k));
-        if k > 0 {
-            if a.rigid {
-                out.lambda[k - 1] = out.x[start];
-            }
-            for r in 0..rows(k - 1) {
-                out.contact[out.first_row[k - 1] + r] = out.x[start + rigid + r];
-            }
-        }
-        let v = start + vel_at(k);
-        out.delta[k] = [out.x[v], out.x[v + 1]];
-    }
-    Ok(())
-}
-
-/// Puts one constraint unknown at `(block, offset)` into the system: for each of its two
-/// nodes `(k, sign)`, `entries(k, sign)` gives its column in node `k`'s momentum rows and
-/// its row's entries on node `k`'s velocity.
-fn couple(
-    system: &mut BlockTridiag,
-    (b, o): (usize, usize),
-    nodes: [(usize, f64); 2],
-    free: &impl Fn(usize) -> bool,
-    block: &impl Fn(usize) -> usize,
-    vel_at: &impl Fn(usize) -> usize,
-    entries: impl Fn(usize, f64) -> ([f64; 2], [f64; 2]),
-) {
-    for (k, sign) in nodes {
-        if !free(k) {
-            continue;
-        }
-        let (col, row) = entries(k, sign);
-        for c in 0..2 {
-            *system.entry(block(k), vel_at(k) + c, b, o) += col[c];
-            *system.entry(b, o, block(k), vel_at(k) + c) += row[c];
-        }
-    }
-}
-
-/// `M v` for the pieces' mass matrix (kg m/s per node).
-pub(super) fn times_mass(pieces: &[Piece], v: &[[f64; 2]]) -> Vec<[f64; 2]> {
-    let mut out = vec![[0.0; 2]; v.len()];
-    for (i, p) in pieces.iter().enumerate() {
-        let [a, b, c, e] = p.mass_blocks();
-        let (u, w) = (v[i], v[i + 1]);
-        out[i] = add(
-            out[i],
-            add(scale(a, u), add(scale(c, w), scale(e, quarter(w)))),
-        );
-        out[i + 1] = add(
-            out[i + 1],
-            add(scale(b, w), sub(scale(c, u), scale(e, quarter(u)))),
-        );
-    }
-    out
-}
-
-/// The velocities whose generalised momenta `M v` are `momenta` at every free node, each
-/// piece's rigidity rate held at zero: the kinetic energy's least loss from velocities
-/// with those momenta, momentum and angular momentum kept (a pinned node at rest).
-pub(super) fn solve_mass(
-    chain: &mut NodalChain,
-    momenta: &[[f64; 2]],
-) -> Result<Vec<[f64; 2]>, StepError> {
-    project_velocities(chain, momenta, true)
-}
-
-/// Holds node 0 at rest by an impulse there, the least kinetic energy lost.
-pub(super) fn catch_first(chain: &mut NodalChain) -> Result<(), StepError> {
-    let momenta = times_mass(&chain.pieces, &chain.velocities);
-    chain.pinned = true;
-    let caught = project_velocities(chain, &momenta, false);
-    chain.pinned = false;
-    chain.velocities = caught?;
-    chain.velocities[0] = [0.0; 2];
-    Ok(())
-}
-
-fn project_velocities(
-    chain: &mut NodalChain,
-    momenta: &[[f64; 2]],
-    rigid: bool,
-) -> Result<Vec<[f64; 2]>, StepError> {
-    let mut a = Assembly::default();
-    a.clear(rigid, chain.pieces.len());
-    for i in 0..chain.pieces.len() {
-        let d = sub(chain.nodes[i + 1], chain.nodes[i]);
-        let l = chain.pieces[i].length_m;
-        a.col.push(scale(1.0 / l, d));
-        a.row.push(scale(1.0 / l, d));
-        a.chord_rhs.push(0.0);
-    }
-    a.node_rhs.extend_from_slice(momenta);
-    let mut out = Solution::default();
-    solve(&chain.pieces, chain.pinned, &mut chain.system, &a, &mut out)?;
-    Ok(out.delta)
-}
-
-/// Records the contacts' impulses of the step (see [`contact::record`]): a contact's
-/// impulse as the chain reports it.
-pub(super) fn contact_impulse(
-    chain: &NodalChain,
-    x_mid: &[[f64; 2]],
-    point: &contact::Point,
-    work_j: [f64; 2],
-) -> ContactImpulse {
-    let floor = chain.floor.expect("contacts need a floor");
-    let (n, t) = (floor.normal, floor.tangent());
-    let p = &chain.pieces[point.piece];
-    let at = super::material(x_mid, point.piece, point.local);
-    let centre = super::material(x_mid, point.piece, p.centre);
-    ContactImpulse {
-        piece: point.piece,
-        vertex: point.vertex,
-        normal_n_s: scale(point.impulse[0], n),
-        friction_n_s: scale(point.impulse[1], t),
-        point_m: at,
-        arm_m: sub(at, centre),
-        work_j,
-    }
 }

@@ -70,7 +70,13 @@ impl NodalBench {
                 });
             }
             let points: Vec<Vec<[f64; 2]>> = (0..pieces.len())
-                .map(|i| if i == 0 { vec![[0.0, 0.0], [1.0, 0.0]] } else { vec![[1.0, 0.0]] })
+                .map(|i| {
+                    if i == 0 {
+                        vec![[0.0, 0.0], [1.0, 0.0]]
+                    } else {
+                        vec![[1.0, 0.0]]
+                    }
+                })
                 .collect();
             let mut chain = NodalChain::new(nodes, velocities, pieces, false, SOLVE);
             let floor = Floor {
@@ -105,7 +111,11 @@ impl NodalBench {
     fn run_to_rest(&mut self, dt: f64, max_steps: usize) {
         for _ in 0..max_steps {
             self.step(dt);
-            let moving = self.chain().velocities().iter().any(|v| v[0].hypot(v[1]) > 1e-6);
+            let moving = self
+                .chain()
+                .velocities()
+                .iter()
+                .any(|v| v[0].hypot(v[1]) > 1e-6);
             if !moving {
                 return;
             }
@@ -157,22 +167,36 @@ fn at_every_step(name: &str, case: impl Fn(f64) -> Vec<(String, StepWork, (f64, 
             }
         }
     }
-    assert!(off.is_empty(), "more than 0.1 % off the exact split: {off:?}");
+    assert!(
+        off.is_empty(),
+        "more than 0.1 % off the exact split: {off:?}"
+    );
 }
 
 fn flat_bar(scale: f64, u: f64, w: f64, mu: f64) -> (StepWork, (f64, f64)) {
     let mut bench = NodalBench::new(9.81, mu);
     let m = 0.005;
-    bench.bar(Vector::new(-0.005, GAP), Vector::new(0.005, GAP), m, Vector::new(u, -w));
+    bench.bar(
+        Vector::new(-0.005, GAP),
+        Vector::new(0.005, GAP),
+        m,
+        Vector::new(u, -w),
+    );
     bench.run_to_rest(5e-5 * scale, 400_000);
     let drop = bench.drop_moment(GAP);
-    (bench.booked, (-(0.5 * m * w * w + 9.81 * drop), -0.5 * m * u * u))
+    (
+        bench.booked,
+        (-(0.5 * m * w * w + 9.81 * drop), -0.5 * m * u * u),
+    )
 }
 
 #[test]
 fn a_bar_landing_flat_is_split_exactly_on_the_nodal_chain() {
     at_every_step("bar, flat", |scale| {
-        let (slides, sticks) = (flat_bar(scale, 1.0, 1.0, 0.5), flat_bar(scale, 0.4, 1.0, 0.5));
+        let (slides, sticks) = (
+            flat_bar(scale, 1.0, 1.0, 0.5),
+            flat_bar(scale, 0.4, 1.0, 0.5),
+        );
         vec![
             ("sliding".into(), slides.0, slides.1),
             ("sticking".into(), sticks.0, sticks.1),
@@ -215,7 +239,10 @@ fn kinked_pair(scale: f64, phi: [f64; 2], u: f64, w: f64, mu: f64) -> (StepWork,
     bench.bar(kink, ends[1], m, vel);
     bench.join_all();
     bench.run_through_impact(5e-6 * scale, 20_000);
-    (bench.booked, plastic_impact(kink_inverse_mass(m, l, phi), [u, -w], mu))
+    (
+        bench.booked,
+        plastic_impact(kink_inverse_mass(m, l, phi), [u, -w], mu),
+    )
 }
 
 #[test]
@@ -247,10 +274,19 @@ fn a_chain_sliding_to_rest_gives_its_kinetic_energy_to_friction_on_the_nodal_cha
         let (m, u) = (0.0025, 0.5);
         for k in 0..8 {
             let x = 0.005 * f64::from(k);
-            bench.bar(Vector::new(x, 0.0), Vector::new(x + 0.005, 0.0), m, Vector::new(u, 0.0));
+            bench.bar(
+                Vector::new(x, 0.0),
+                Vector::new(x + 0.005, 0.0),
+                m,
+                Vector::new(u, 0.0),
+            );
         }
         bench.join_all();
         bench.run_to_rest(5e-5 * scale, 400_000);
-        vec![("to rest".into(), bench.booked, (0.0, -0.5 * 8.0 * m * u * u))]
+        vec![(
+            "to rest".into(),
+            bench.booked,
+            (0.0, -0.5 * 8.0 * m * u * u),
+        )]
     });
 }
