@@ -9,6 +9,7 @@ mod fuzz;
 mod hard;
 mod house;
 mod mcap;
+mod nodal;
 mod paths;
 mod sim;
 mod support;

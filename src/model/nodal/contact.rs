@@ -508,14 +508,19 @@ pub(super) fn project_out(
             *x = add(*x, *d);
         }
     }
-    let h_f = kick;
-    // The potential is -f . x, and kick = h f: the step's length cancels in the ratio of
-    // the move's work to the kick's (both are read per unit of h below).
+    // A projection that did not close (points of one piece that began the step at depths
+    // its rigidity cannot all keep) is not kept: its last iterate may open the pieces. The
+    // points stay as deep as the step left them.
+    if !closed {
+        chain.nodes = before;
+        return Ok((0.0, false));
+    }
+    // The potential is -f . x, and kick = h f.
     let lift: f64 = chain
         .nodes
         .iter()
         .zip(&before)
-        .zip(h_f)
+        .zip(kick)
         .map(|((x, b), k)| -dot(*k, sub(*x, *b)))
         .sum();
     Ok((lift / h, closed))

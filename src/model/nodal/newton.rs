@@ -410,9 +410,8 @@ fn finish(
     report.floor_work_j = contact::record(chain, &s.contacts.points, &s.x0, h);
     report.kinetic_change_j = chain.kinetic_j() - kinetic0;
     report.joint_gap_m = chain.length_error_m();
-    // A projection that cannot meet every point's height (points of one piece that began
-    // the step at different depths below the floor, which the piece's rigidity cannot all
-    // keep) leaves the least-squares compromise: the depth left is reported.
+    // A projection that cannot meet every point's height is not kept (see
+    // `contact::project_out`): the depth left is reported.
     let (projection_j, _) = contact::project_out(chain, &mut s.contacts, &s.kick, h)?;
     report.projection_j = projection_j;
     report.penetration_m = contact::penetration(chain, &s.contacts.points);
