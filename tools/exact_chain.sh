@@ -9,8 +9,12 @@
 #                 at its 0.3 rad a step, and with pieces of 5 b at half the step
 # Usage: tools/exact_chain.sh [folded-free|folded-table|coil [SCENE ...]|thin-converge]
 #        (default: all but thin-converge)
+# JOINTS=midpoint runs the folded chain on the nodal chain's midpoint step instead of the
+# exact chain's RATTLE; ENGINES=exact,midpoint (default rapier,exact) picks the coil's engines.
 # Runs two at a time; the engine times are per run, so they share the machine's cores.
 set -euo pipefail
+joints=${JOINTS:-exact}
+engines=${ENGINES:-rapier,exact}
 cd "$(dirname "$0")/.."
 cargo build --release --locked --quiet
 bin=target/release/uncoil
@@ -19,12 +23,12 @@ out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
 folded_free() {
-  echo "### The folded chain on the exact chain, no floor (dt 5e-5 s)"
+  echo "### The folded chain, joints $joints, no floor (dt 5e-5 s)"
   echo
   echo "| links | t error at 0.25 / 0.5 / 0.75 / 0.9 L | joints / released at 0.9 L | numerical at 0.9 L | engine time |"
   echo "|---|---|---|---|---|"
   for n in 50 200 500 2000; do
-    "$bin" run "$scene" --set solver.joints=exact --set chain.links=$n \
+    "$bin" run "$scene" --set solver.joints=$joints --set chain.links=$n \
       --out "$out/free-$n" > /dev/null 2>&1 || true
     python3 - "$out/free-$n/report.json" <<'PY'
 import json, sys
@@ -40,14 +44,14 @@ PY
 }
 
 folded_table() {
-  echo "### Onto a table, 8 pin heights 0.70-0.84 L, to rest or 1 s (mean and standard error)"
+  echo "### Onto a table, joints $joints, 8 pin heights 0.70-0.84 L, to rest or 1 s (mean and standard error)"
   echo
   echo "| links | step | floor normal | friction | numerical | missed steps | engine time a run |"
   echo "|---|---|---|---|---|---|---|"
   for n in 50 200; do
     for dt in 5e-5 2.5e-5; do
       for h in 0.70 0.72 0.74 0.76 0.78 0.80 0.82 0.84; do
-        echo "$bin run $scene --set solver.joints=exact --set chain.links=$n --set solver.dt_s=$dt \
+        echo "$bin run $scene --set solver.joints=$joints --set chain.links=$n --set solver.dt_s=$dt \
 --set floor.enabled=true --set pin.height_m=$h --set stop.max_time_s=1 --out $out/table-$n-$dt-$h"
       done | xargs -P 2 -I{} sh -c '{} > /dev/null 2>&1 || true'
       python3 - "$out" "$n" "$dt" <<'PY'
@@ -78,16 +82,16 @@ coil() {
     # A run a guard stopped is a row of the sweep (its status column says why), not the
     # end of the script: the sweep then exits 3, and the ensemble is still summarised.
     "$bin" sweep "scenes/$name.toml" --vary push.contact_speed_m_s=$pushes \
-      --vary solver.bang_engine=rapier,exact --jobs 2 --quiet --out "$out/coil-$name" \
+      --vary solver.bang_engine=$engines --jobs 2 --quiet --out "$out/coil-$name" \
       > /dev/null || echo "($name: some runs did not complete; their rows say why)" >&2
     echo "### $name: 8 pushes on each bang engine (mean and standard error)"
     echo
-    python3 - "$out/coil-$name/sweep.csv" <<'PY'
+    python3 - "$out/coil-$name/sweep.csv" "$engines" <<'PY'
 import csv, statistics as st, sys
 rows = list(csv.DictReader(open(sys.argv[1])))
 print("| engine | floor normal | friction | freezing | numerical | bang wall / unroll wall |")
 print("|---|---|---|---|---|---|")
-for eng in ("rapier", "exact"):
+for eng in sys.argv[2].split(","):
     rs = [r for r in rows if r["solver.bang_engine"] == eng and r["status"] == "ok"]
     if len(rs) < len([r for r in rows if r["solver.bang_engine"] == eng]):
         print(f"({eng}: {len(rs)} runs completed; the others are left out)")
