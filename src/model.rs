@@ -398,6 +398,7 @@ impl Model {
         self.accounts.impulses = self.step_impulses(&moving, &contacts, dt);
         self.accounts.moved_angular_momentum = self.moved_angular_momentum(&moving, dt);
         let (kinetic, potential) = self.energy();
+        self.accounts.step_energy = Some((self.energy_key(), kinetic, potential));
         let after = kinetic + potential;
         match self.phase {
             Phase::Rolling => self.accounts.ledger.step_j += before - after,
@@ -432,6 +433,16 @@ impl Model {
             self.end_bang(BangEnd::Cap);
         }
         self.observe()
+    }
+
+    /// The state that [`Accounts::step_energy`] was read at.
+    fn energy_key(&self) -> parts::EnergyKey {
+        (
+            self.phase,
+            self.coil.first_attached,
+            self.chain.free.len(),
+            self.chain.frozen_nodes.len(),
+        )
     }
 
     /// Whether the exact chain steps the model now: in the bang, if the scene says so.

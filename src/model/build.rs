@@ -134,6 +134,12 @@ pub(super) fn new_world(scene: &Scene) -> (PhysicsWorld, f64, f64) {
     // for the yoga mat): the end of an unroll is far faster than that, so lift the cap.
     ip.normalized_max_linear_velocity = Real::MAX;
     ip.dt = scene.solver.max_dt_s;
+    // No continuous collision detection: the adaptive step turns no body by more than a
+    // fraction of a link angle (a bang piece by `bang_step_rad`), so nothing moves through
+    // the floor within a step, and the guards' penetration bound checks that every step.
+    // Left on, the engine sweeps every fast body against the floor each step (an eighth of
+    // the thin tape's engine time).
+    ip.max_ccd_substeps = 0;
     // The floor is a damped spring in rapier (60 Hz by default): the coil would sink
     // g / (2 pi f)^2 into it, losing that potential energy in the spring's damper, and the
     // load changes of every link would be damped too. See `Solver::contact_hz`.

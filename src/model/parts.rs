@@ -6,9 +6,9 @@ use std::collections::VecDeque;
 
 use rapier2d_f64::prelude::*;
 
-use super::EnergyLedger;
 use super::build::{CoilSums, Link, Piece};
 use super::impulses::StepImpulses;
+use super::{EnergyLedger, Phase};
 use crate::spiral::{Spiral, SpiralMoments};
 
 /// What the scene fixed: the steps' rules, the bang's settings, gravity and the tape's
@@ -162,4 +162,12 @@ pub(super) struct Accounts {
     /// The moving part's angular momentum about the origin over the last step, from how
     /// far it moved (kg m^2/s): see `Model::moved_angular_momentum`.
     pub(super) moved_angular_momentum: f64,
+    /// The kinetic and potential energy the last step ended with (J), and the state they
+    /// were read at: an observation of that same state reads them instead of summing every
+    /// body again.
+    pub(super) step_energy: Option<(EnergyKey, f64, f64)>,
 }
+
+/// What changes the set of bodies or their masses between a step's end and its observation:
+/// the phase, the links shed, the pieces moving, the links frozen.
+pub(super) type EnergyKey = (Phase, usize, usize, usize);
