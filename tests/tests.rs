@@ -11,6 +11,7 @@ mod house;
 mod mcap;
 mod nodal;
 mod paths;
+mod readme;
 mod sim;
 mod support;
 mod sweep;
