@@ -161,7 +161,7 @@ const EXACT_NUMERICAL: f64 = 0.005;
 fn the_yoga_mat_s_bang_on_the_exact_chain_comes_to_rest_with_its_joints_closed() {
     // The shipped bang, on the exact chain: to rest without gaining energy, the ledger
     // closing, the floor taking what it received, every step's joints closed and the
-    // numerical part a tenth of rapier's (8 pushes: 0.10 +- 0.04 %, docs/final-bang.md).
+    // numerical part a tenth of rapier's (8 pushes: 0.072 +- 0.015 %, docs/final-bang.md).
     let scene = shipped("yoga-mat");
     assert_eq!(scene.solver.bang_engine, uncoil::scene::BangEngine::Exact);
     let (samples, report) = run_kept(&scene);

@@ -92,10 +92,10 @@ pub fn spin_table(report: &RunReport, samples: &[Sample]) -> String {
     o
 }
 
-/// `t / t_sim - 1` as a signed percentage, or a dash.
+/// `t_sim / t - 1` as a signed percentage (the simulation against the rival `t`), or a dash.
 fn rel(t: Option<f64>, t_sim: Option<f64>) -> String {
     match (t, t_sim) {
-        (Some(t), Some(s)) if s > 0.0 => format!("{:+.2}%", 100.0 * (t / s - 1.0)),
+        (Some(t), Some(s)) if t > 0.0 => format!("{:+.2}%", 100.0 * (s / t - 1.0)),
         _ => "-".into(),
     }
 }
@@ -113,7 +113,8 @@ pub fn cell(rival: &RivalTimes, t: Option<f64>, f: f64, t_sim: Option<f64>) -> S
 }
 
 /// The paradox table of a run: each milestone's time in the simulation and in every rival
-/// the paper gives for its case, with the rival's time over the simulation's minus 1; `*`
+/// the paper gives for its case, with the simulation's time over the rival's minus 1 (as
+/// `uncoil run` prints sim/ex: negative where the simulation is ahead); `*`
 /// marks the reference the simulation must converge to.
 pub fn paradox(report: &RunReport) -> Table {
     let rv = &report.rivals;
@@ -161,7 +162,8 @@ pub fn table(report: &RunReport, samples: &[Sample]) -> String {
     let _ = writeln!(o);
     let _ = writeln!(
         o,
-        "Percentages: the rival's time over the simulation's, minus 1. * = the reference the \
+        "Percentages: the simulation's time over the rival's, minus 1 (negative: the simulation \
+         is ahead). * = the reference the \
          simulation must converge to."
     );
     for r in rv {

@@ -65,8 +65,8 @@ fn coil_times(o: &mut String, report: &RunReport) {
 fn rival_times(o: &mut String, report: &RunReport) {
     let _ = writeln!(
         o,
-        "Time to reach each laid fraction f, against the analyses of {} (the rival's time over the \
-         simulation's, minus 1; * = the reference the simulation must converge to):",
+        "Time to reach each laid fraction f, against the analyses of {} (the simulation's time over \
+         the rival's, minus 1, as sim/ex elsewhere; * = the reference the simulation must converge to):",
         Case::of(&report.scene).section()
     );
     o.push_str(&paradox(report).text("  "));
@@ -102,8 +102,9 @@ fn bang_summary(o: &mut String, report: &RunReport, bang: &crate::run::BangRepor
         let of = |x: f64| 100.0 * x / d;
         let _ = writeln!(
             o,
-            "  dissipated {d:.5} J, measured where it happened: floor impacts {:.5} J ({:.1} %), \
-             floor friction {:.5} J ({:.1} %), freezing {:.5} J ({:.2} %);",
+            "  dissipated {d:.5} J, measured where it happened (shares of what it dissipated): \
+             floor impacts {:.5} J ({:.1} %), floor friction {:.5} J ({:.1} %), freezing {:.5} J \
+             ({:.2} %);",
             b.floor_normal_j,
             of(b.floor_normal_j),
             b.floor_friction_j,
@@ -119,6 +120,12 @@ fn bang_summary(o: &mut String, report: &RunReport, bang: &crate::run::BangRepor
             of(b.joints_j),
             b.residual_j,
             of(b.residual_j)
+        );
+        let _ = writeln!(
+            o,
+            "  one landing: a landing is chaotic, and the split's mean and its error come from \
+             an ensemble of pushes, e.g. `{}`",
+            ensemble_command(report)
         );
     } else {
         let _ = writeln!(
@@ -207,6 +214,29 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
         out_dir.join(REPORT).display()
     );
     o
+}
+
+/// The command that runs this scene's bang as an ensemble: its push and the seven just above
+/// it (the ensembles of docs/final-bang.md). A shipped scene by
+/// its name; another by a placeholder for its file.
+fn ensemble_command(report: &RunReport) -> String {
+    let name = &report.scene.name;
+    let scene = if crate::scene::shipped::text(name).is_some() {
+        name.clone()
+    } else {
+        "SCENE.toml".to_owned()
+    };
+    // Steps of a hundredth of the push's decade: 0.300, 0.301, ... for 0.3 m/s.
+    let v = report.scene.push.contact_speed_m_s;
+    let decimals = (2.0 - v.log10().floor()).clamp(0.0, 12.0);
+    let step = 10f64.powf(-decimals);
+    let pushes: Vec<String> = (0..8)
+        .map(|k| format!("{:.*}", decimals as usize, v + step * f64::from(k)))
+        .collect();
+    format!(
+        "uncoil sweep {scene} --vary push.contact_speed_m_s={}",
+        pushes.join(",")
+    )
 }
 
 /// The energy ledger: E0, what was lost before the bang and where, what the bang received

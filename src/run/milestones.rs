@@ -2,7 +2,7 @@
 //! and 2b; a spool at laid fractions), when the simulation crossed each, and the
 //! references' times there.
 
-use crate::model::Observation;
+use crate::model::{Observation, Phase};
 use crate::run::report::{Milestone, MilestoneKey, RivalTimes};
 use crate::scene::Scene;
 use crate::theory::References;
@@ -35,6 +35,10 @@ struct Hit {
     xdot: f64,
     kinetic: f64,
     potential: f64,
+    /// What the bang had dissipated by then (J), left out of the milestone's loss. A
+    /// milestone crossed in the step that releases the coil (the thin tape's 2b, its release
+    /// radius) takes the energies before that step, as the ledger's "before the bang" does.
+    bang_j: f64,
 }
 
 /// The milestones of a scene and when the run crossed them.
@@ -66,11 +70,19 @@ impl Milestones {
         for (k, &f) in self.fractions.iter().enumerate() {
             if self.hits[k].is_none() && p.laid_fraction < f && obs.laid_fraction >= f {
                 let s = (f - p.laid_fraction) / (obs.laid_fraction - p.laid_fraction);
+                // Crossed in the step that releases the coil: its energies before the
+                // release, as the ledger's "before the bang" takes them.
+                let at = if p.phase == Phase::Rolling && obs.phase != Phase::Rolling {
+                    p
+                } else {
+                    obs
+                };
                 self.hits[k] = Some(Hit {
                     t_s: p.t_s + s * (obs.t_s - p.t_s),
                     xdot,
-                    kinetic: obs.kinetic_j,
-                    potential: obs.potential_j,
+                    kinetic: at.kinetic_j,
+                    potential: at.potential_j,
+                    bang_j: at.ledger.bang_j,
                 });
             }
         }
@@ -121,7 +133,9 @@ impl Milestones {
                     xdot_eq7_m_s: t_eq7.map(|_| refs.continuum.state_at_radius(*r, 0.0).xdot_m_s),
                     kinetic_j: hit.as_ref().map(|h| h.kinetic),
                     potential_j: hit.as_ref().map(|h| h.potential),
-                    dissipated_j: hit.as_ref().map(|h| e0 - h.kinetic - h.potential),
+                    dissipated_j: hit
+                        .as_ref()
+                        .map(|h| e0 - h.kinetic - h.potential - h.bang_j),
                 }
             })
             .collect()

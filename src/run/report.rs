@@ -70,7 +70,10 @@ pub struct Milestone {
     pub kinetic_j: Option<f64>,
     /// Simulation potential energy (J).
     pub potential_j: Option<f64>,
-    /// Simulation energy dissipated so far (J).
+    /// Simulation energy dissipated so far (J), before the bang: where the step that
+    /// crosses the milestone also releases the coil (the thin tape's 2b), what the release
+    /// and the bang took in it is left out, so that it is never more than the loss before
+    /// the bang.
     pub dissipated_j: Option<f64>,
 }
 

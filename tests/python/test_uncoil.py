@@ -12,6 +12,7 @@ import os
 import pathlib
 import signal
 import subprocess
+import sys
 import threading
 import time
 
@@ -60,8 +61,15 @@ def test_report_ledger_milestones_and_stop_reason(yoga):
     assert r[0] == pytest.approx(0.06, rel=1e-3) and r[-1] < 0.006
 
 
+def test_to_pandas_without_pandas_says_what_to_install(yoga, monkeypatch):
+    monkeypatch.setitem(sys.modules, "pandas", None)  # `import pandas` then fails
+    with pytest.raises(ModuleNotFoundError, match=r"needs pandas.*pip install pandas.*\[pandas\]"):
+        yoga[0].to_pandas()
+
+
 def test_to_pandas_is_the_samples_frame(yoga):
-    pd = pytest.importorskip("pandas")
+    # The README's install line, `pip install ".[pandas]"`, brings pandas; so does `.[test]`.
+    import pandas as pd
     frame = yoga[0].to_pandas()
     assert isinstance(frame, pd.DataFrame)
     assert list(frame.columns) == list(yoga[0].samples)

@@ -122,8 +122,17 @@ class RunResult:
         return list(self.report["milestones"])
 
     def to_pandas(self) -> Any:
-        """The samples as a pandas DataFrame (needs pandas)."""
-        import pandas as pd
+        """The samples as a pandas DataFrame (needs pandas: `pip install "uncoil[pandas]"`,
+        or `pip install ".[pandas]"` in the repository, or `pip install pandas`)."""
+        try:
+            import pandas as pd
+        except ImportError as e:
+            raise ModuleNotFoundError(
+                "RunResult.to_pandas() needs pandas, which is not installed: "
+                "pip install pandas (or install uncoil with its extra, "
+                "pip install \".[pandas]\" in the repository)",
+                name="pandas",
+            ) from e
 
         return pd.DataFrame(self.samples)
 
