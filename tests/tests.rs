@@ -12,6 +12,7 @@ mod mcap;
 mod nodal;
 mod paths;
 mod readme;
+mod scene_files;
 mod sim;
 mod support;
 mod sweep;

@@ -10,6 +10,7 @@
 
 mod run;
 mod sweep;
+mod ticks;
 
 use std::ops::Range;
 
@@ -17,6 +18,8 @@ use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
+
+use self::ticks::{LogAxis, LogTicks};
 
 pub use self::run::plot_run;
 pub use self::sweep::plot_sweep;
@@ -27,7 +30,7 @@ type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 type BackendCoord = (i32, i32);
 
 /// A log-log chart on an SVG area.
-type LogChart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
+type LogChart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<LogAxis, LogAxis>>;
 /// A linear chart on an SVG area.
 type LinChart<'a, 'b> =
     ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
@@ -56,49 +59,16 @@ fn font(px: f64) -> (&'static str, f64) {
     (FONT, (1.24 * px).round())
 }
 
-/// A log axis's tick labels, `{v:.0e}`: the powers of ten and as many of their multiples
-/// as leave room between the labels; the others' ticks stay unlabelled.
-#[derive(Debug, Clone, Copy)]
-struct LogTicks {
-    /// The mantissas labelled.
-    keep: &'static [u8],
-}
-
-impl LogTicks {
-    /// Labels for an axis spanning `(lo, hi)` over `len_px`, each label needing `room_px`
-    /// along it (a tick label's width on an x axis, its height on a y axis).
-    fn new((lo, hi): (f64, f64), len_px: u32, room_px: f64) -> Self {
-        const SETS: [&[u8]; 4] = [
-            &[1, 2, 3, 4, 5, 6, 7, 8, 9],
-            &[1, 2, 3, 5],
-            &[1, 2, 5],
-            &[1],
-        ];
-        let per_decade = f64::from(len_px) / (hi / lo).log10().max(1e-9);
-        // The narrowest gap between two labels of a set, in decades (9 to 10 for all).
-        let narrowest = |set: &[u8]| {
-            set.iter()
-                .zip(set.iter().skip(1).chain([&10]))
-                .map(|(a, b)| (f64::from(*b) / f64::from(*a)).log10())
-                .fold(1.0, f64::min)
-        };
-        let keep = SETS
-            .into_iter()
-            .find(|set| narrowest(set) * per_decade >= room_px)
-            .unwrap_or(&[1]);
-        Self { keep }
-    }
-
-    /// The label of tick `v`: blank unless its mantissa is kept.
-    fn label(self, v: &f64) -> String {
-        let s = format!("{v:.0e}");
-        let mantissa = s.bytes().next().map_or(0, |c| c.wrapping_sub(b'0'));
-        if self.keep.contains(&mantissa) {
-            s
-        } else {
-            String::new()
-        }
-    }
+/// The plotting area's size (px) a chart built on `area` with this module's margins and
+/// label areas will have, `caption` or not: what the ticks are chosen for, before the
+/// chart is built.
+fn plot_size(area: &Area<'_>, caption: bool) -> (u32, u32) {
+    let (w, h) = area.dim_in_pixel();
+    let caption_px = if caption { (1.5 * DESC_PX) as u32 } else { 0 };
+    (
+        w.saturating_sub(2 * MARGIN_PX + Y_LABEL_AREA_PX),
+        h.saturating_sub(2 * MARGIN_PX + X_LABEL_AREA_PX + caption_px),
+    )
 }
 
 /// The room a tick label needs along an x axis (px): five characters and a gap.
@@ -434,24 +404,24 @@ fn log_chart<'a, 'b>(
 ) -> anyhow::Result<LogChart<'a, 'b>> {
     let (x0, x1) = log_range(xs);
     let (y0, y1) = log_range(ys);
+    let (w, h) = plot_size(area, true);
+    let x_ticks = LogTicks::new((x0, x1), w, X_TICK_ROOM_PX);
+    let y_ticks = LogTicks::new((y0, y1), h, Y_TICK_ROOM_PX);
     let mut chart = ChartBuilder::on(area)
         .caption(caption, font(DESC_PX))
         .margin(MARGIN_PX)
         .x_label_area_size(X_LABEL_AREA_PX)
         .y_label_area_size(Y_LABEL_AREA_PX)
-        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+        .build_cartesian_2d(x_ticks.axis((x0, x1)), y_ticks.axis((y0, y1)))
         .map_err(err)?;
-    let (w, h) = chart.plotting_area().dim_in_pixel();
-    let x_ticks = LogTicks::new((x0, x1), w, X_TICK_ROOM_PX);
-    let y_ticks = LogTicks::new((y0, y1), h, Y_TICK_ROOM_PX);
     chart
         .configure_mesh()
         .x_desc(x_desc)
         .y_desc(y_desc)
-        .x_labels(20)
-        .y_labels(20)
-        .x_label_formatter(&|v| x_ticks.label(v))
-        .y_label_formatter(&|v| y_ticks.label(v))
+        .x_labels(x_ticks.values.len().max(1))
+        .y_labels(y_ticks.values.len().max(1))
+        .x_label_formatter(&LogTicks::label)
+        .y_label_formatter(&LogTicks::label)
         .label_style(font(TICK_PX))
         .axis_desc_style(font(DESC_PX))
         .light_line_style(WHITE.mix(0.0))
@@ -564,20 +534,5 @@ mod tests {
             !(x >= bx && x <= bx + bw && y >= by && y <= by + bh),
             "the legend ({bx}, {by}, {bw} x {bh}) covers the curve's start ({x}, {y})"
         );
-    }
-
-    #[test]
-    fn log_ticks_label_what_has_room() {
-        // Two decades over 800 px: 400 px a decade, room for 1, 2, 3 and 5 at 56 px each.
-        let ticks = LogTicks::new((1e-3, 1e-1), 800, X_TICK_ROOM_PX);
-        let labels: Vec<String> = [1e-2, 2e-2, 3e-2, 4e-2, 5e-2, 7e-2]
-            .iter()
-            .map(|v| ticks.label(v))
-            .collect();
-        assert_eq!(labels, ["1e-2", "2e-2", "3e-2", "", "5e-2", ""]);
-        // Six decades over 300 px: the powers of ten alone.
-        let ticks = LogTicks::new((1e-7, 1e-1), 300, X_TICK_ROOM_PX);
-        assert_eq!(ticks.label(&2e-3), "");
-        assert_eq!(ticks.label(&1e-3), "1e-3");
     }
 }

@@ -9,7 +9,7 @@ pub struct PowerFit {
     pub order: f64,
     /// The intercept, `log10` of the constant.
     pub log10_c: f64,
-    /// Standard error of `order` (`NaN` with 2 points).
+    /// Standard error of `order`.
     pub order_se: f64,
     /// Coefficient of determination of the log-log line (1 = a perfect power law).
     pub r2: f64,
@@ -24,8 +24,13 @@ impl PowerFit {
     }
 }
 
+/// The fewest points a fit is made from: a line through two points always fits them
+/// (R² = 1), so it says nothing of a power law.
+pub const MIN_FIT_POINTS: usize = 3;
+
 /// Fits `y = C x^order` by least squares on `(log10 x, log10 y)`, using the points where
-/// both are finite and positive; `None` if fewer than 2 such points or all `x` are equal.
+/// both are finite and positive; `None` if fewer than [`MIN_FIT_POINTS`] such points or all
+/// `x` are equal.
 pub fn fit_power(x: &[f64], y: &[f64]) -> Option<PowerFit> {
     let pts: Vec<(f64, f64)> = x
         .iter()
@@ -34,7 +39,7 @@ pub fn fit_power(x: &[f64], y: &[f64]) -> Option<PowerFit> {
         .map(|(a, b)| (a.log10(), b.log10()))
         .collect();
     let n = pts.len();
-    if n < 2 {
+    if n < MIN_FIT_POINTS {
         return None;
     }
     let nf = n as f64;
@@ -54,11 +59,7 @@ pub fn fit_power(x: &[f64], y: &[f64]) -> Option<PowerFit> {
         .map(|p| (p.1 - (log10_c + order * p.0)).powi(2))
         .sum();
     let r2 = if syy > 0.0 { 1.0 - ss_res / syy } else { 1.0 };
-    let order_se = if n > 2 {
-        (ss_res / (nf - 2.0) / sxx).sqrt()
-    } else {
-        f64::NAN
-    };
+    let order_se = (ss_res / (nf - 2.0) / sxx).sqrt();
     Some(PowerFit {
         order,
         order_se,

@@ -4,6 +4,7 @@
 
 use std::fmt::Write as _;
 
+use super::fit::MIN_FIT_POINTS;
 use super::{BANG_OBSERVABLES, BangStudy, NUMERICAL, PowerFit, SweepAnalysis};
 use crate::study::sweep::{INDEX_COLUMN, STATUS_COLUMN, SweepTable};
 
@@ -43,14 +44,8 @@ impl BangStudy {
             .map(|k| {
                 if BANG_OBSERVABLES[k].1 == NUMERICAL {
                     return self.fit[k].map_or_else(
-                        || "-".to_owned(),
-                        |f| {
-                            if f.order_se.is_finite() {
-                                format!("itself: p = {:.2} ± {:.2}", f.order, f.order_se)
-                            } else {
-                                format!("itself: p = {:.2}", f.order)
-                            }
-                        },
+                        || "itself: too few points to fit".to_owned(),
+                        |f| format!("itself: p = {:.2} ± {:.2}", f.order, f.order_se),
                     );
                 }
                 // The change from the finest setting is noise if within two standard errors.
@@ -60,11 +55,8 @@ impl BangStudy {
                 });
                 match (&self.fit[k], resolved) {
                     (_, false) => "within noise".to_owned(),
-                    (Some(f), true) if f.order_se.is_finite() => {
-                        format!("p = {:.2} ± {:.2}", f.order, f.order_se)
-                    }
-                    (Some(f), true) => format!("p = {:.2}", f.order),
-                    (None, true) => "-".to_owned(),
+                    (Some(f), true) => format!("p = {:.2} ± {:.2}", f.order, f.order_se),
+                    (None, true) => "too few points to fit".to_owned(),
                 }
             })
             .collect();
@@ -387,10 +379,10 @@ impl SweepAnalysis {
     }
 }
 
-/// A fit as `p ± se (R², n)`, or `-` without one.
+/// A fit as `p ± se (R², n)`, or why there is none.
 fn show_fit(f: &Option<PowerFit>) -> String {
     f.map_or_else(
-        || "-".to_owned(),
+        || format!("too few points to fit (under {MIN_FIT_POINTS})"),
         |f| {
             let se = if f.order_se.is_finite() {
                 format!(" ± {:.2}", f.order_se)

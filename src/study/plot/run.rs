@@ -10,7 +10,7 @@ use plotters::prelude::*;
 use super::{
     Area, Curve, DESC_PX, Drawn, EQ7, EXACT, LinChart, Line, LogChart, LogTicks, MARGIN_PX, SIM,
     TICK_PX, X_LABEL_AREA_PX, X_TICK_ROOM_PX, Y_LABEL_AREA_PX, color, draw_line, err, font, legend,
-    line_chart, log_chart, log_range, pairs, positive_pairs, range,
+    line_chart, log_chart, log_range, pairs, plot_size, positive_pairs, range,
 };
 use crate::output::folder::{REPORT, SAMPLES};
 use crate::run::RunReport;
@@ -395,6 +395,7 @@ fn bang_panel(
     ];
     let (x0, x1) = log_range(since.iter().copied());
     let (y0, y1) = range(curves.iter().flat_map(|c| c.1.iter().map(|p| p.1)));
+    let ticks = LogTicks::new((x0, x1), plot_size(area, true).0, X_TICK_ROOM_PX);
     let mut chart = ChartBuilder::on(area)
         .caption(
             format!("{name}: the final bang, from its release; dissipated so far, by mechanism"),
@@ -403,18 +404,14 @@ fn bang_panel(
         .margin(MARGIN_PX)
         .x_label_area_size(X_LABEL_AREA_PX)
         .y_label_area_size(Y_LABEL_AREA_PX)
-        .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
+        .build_cartesian_2d(ticks.axis((x0, x1)), y0..y1)
         .map_err(err)?;
-    let ticks = LogTicks::new(
-        (x0, x1),
-        chart.plotting_area().dim_in_pixel().0,
-        X_TICK_ROOM_PX,
-    );
     chart
         .configure_mesh()
         .x_desc("time since the release (s), log scale")
         .y_desc("energy (J)")
-        .x_label_formatter(&|v| ticks.label(v))
+        .x_labels(ticks.values.len().max(1))
+        .x_label_formatter(&LogTicks::label)
         .label_style(font(TICK_PX))
         .axis_desc_style(font(DESC_PX))
         .light_line_style(WHITE.mix(0.0))
@@ -522,7 +519,21 @@ fn approach_marks(report: &RunReport, t: &[f64], r: &[f64]) -> Vec<(String, f64)
     if report.bang.is_some() {
         marks.push(("the release (last link)".into(), report.approach.peak_r_m));
     }
-    marks
+    merged(marks)
+}
+
+/// Marks at the same radius (events within one sample of each other: the thin tape lifts
+/// off where the exact model hops) as one line naming them all: one drawn over another
+/// would hide it and leave its legend entry pointing at nothing.
+fn merged(marks: Vec<(String, f64)>) -> Vec<(String, f64)> {
+    let mut out: Vec<(String, f64)> = Vec::new();
+    for (label, at) in marks {
+        match out.iter_mut().find(|(_, r)| (*r / at - 1.0).abs() < 1e-9) {
+            Some((names, _)) => *names = format!("{names}, {label} (the same sample)"),
+            None => out.push((label, at)),
+        }
+    }
+    out
 }
 
 /// The `marks` as vertical lines spanning the simulation's x' (`sim`), booked in `drawn`.
@@ -545,4 +556,28 @@ fn draw_marks(
         draw_line(chart, drawn, vec![(at, y0), (at, y1)], line, label)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::merged;
+
+    #[test]
+    fn marks_at_one_radius_are_one_line_naming_both() {
+        let marks = vec![
+            ("lift off".to_owned(), 1.2e-3),
+            ("exact model hops".to_owned(), 1.2e-3),
+            ("the release (last link)".to_owned(), 2e-4),
+        ];
+        assert_eq!(
+            merged(marks),
+            [
+                (
+                    "lift off, exact model hops (the same sample)".to_owned(),
+                    1.2e-3
+                ),
+                ("the release (last link)".to_owned(), 2e-4)
+            ]
+        );
+    }
 }

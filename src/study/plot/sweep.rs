@@ -10,7 +10,7 @@ use plotters::prelude::*;
 use super::{
     Area, DESC_PX, Drawn, EXACT, Line, LogChart, LogTicks, SIM, TICK_PX, X_LABEL_AREA_PX,
     X_TICK_ROOM_PX, Y_LABEL_AREA_PX, color, draw_line, draw_markers, err, font, legend, log_chart,
-    log_range, pairs, positive_pairs, range,
+    log_range, pairs, plot_size, positive_pairs, range,
 };
 use crate::study::analysis::{BANG_OBSERVABLES, BangStudy, PowerFit, Study, SweepAnalysis};
 
@@ -112,6 +112,14 @@ fn pareto_plot(path: &Path, a: &SweepAnalysis, title: &str) -> anyhow::Result<()
         .filter(|&&i| a.err[i] > 0.0)
         .map(|&i| (a.cost[i], a.err[i]))
         .collect();
+    // Each run on the front ringed, so that a front of one run shows too.
+    drawn.book(&chart, &front, true, "on the Pareto front".to_owned());
+    let ring = BLACK.stroke_width(1);
+    chart
+        .draw_series(front.iter().map(|&p| Circle::new(p, 8, ring)))
+        .map_err(err)?
+        .label("on the Pareto front")
+        .legend(move |(x, y)| Circle::new((x + 10, y), 8, ring));
     let line = Line::solid(BLACK, 1);
     draw_line(&mut chart, &mut drawn, front, line, "Pareto front")?;
     if let Some((e, c)) = a.target {
@@ -337,24 +345,21 @@ fn bang_study_plot(path: &Path, b: &BangStudy, title: &str) -> anyhow::Result<()
         let lo = m.iter().zip(se).map(|(m, s)| m - s.max(0.0));
         let hi = m.iter().zip(se).map(|(m, s)| m + s.max(0.0));
         let (y0, y1) = range(lo.chain(hi));
+        let ticks = LogTicks::new((h0, h1), plot_size(panel, true).0, X_TICK_ROOM_PX);
         let mut chart = ChartBuilder::on(panel)
             .caption(BANG_OBSERVABLES[k].0, font(DESC_PX))
             .margin(8)
             .x_label_area_size(X_LABEL_AREA_PX)
             .y_label_area_size(Y_LABEL_AREA_PX)
-            .build_cartesian_2d((h0..h1).log_scale(), y0..y1)
+            .build_cartesian_2d(ticks.axis((h0, h1)), y0..y1)
             .map_err(err)?;
-        let ticks = LogTicks::new(
-            (h0, h1),
-            chart.plotting_area().dim_in_pixel().0,
-            X_TICK_ROOM_PX,
-        );
         chart
             .configure_mesh()
             .x_desc(format!("h of {}", b.key))
             // A panel is some 160 px high: six labels leave room between them.
             .y_labels(6)
-            .x_label_formatter(&|v| ticks.label(v))
+            .x_labels(ticks.values.len().max(1))
+            .x_label_formatter(&LogTicks::label)
             .label_style(font(TICK_PX))
             .axis_desc_style(font(DESC_PX))
             .light_line_style(WHITE.mix(0.0))
