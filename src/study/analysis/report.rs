@@ -48,6 +48,10 @@ impl BangStudy {
                         |f| format!("itself: p = {:.2} ± {:.2}", f.order, f.order_se),
                     );
                 }
+                // With one run a setting there is no error to tell a change from noise by.
+                if self.se[k].iter().any(|s| !s.is_finite()) {
+                    return "one run a setting: no error to judge by".to_owned();
+                }
                 // The change from the finest setting is noise if within two standard errors.
                 let resolved = (0..last).any(|i| {
                     let d = (self.mean[k][i] - self.mean[k][last]).abs();
