@@ -535,3 +535,41 @@ fn sigterm_stops_a_sweep_its_running_row_says_interrupted_and_resume_finishes_it
         );
     }
 }
+
+/// A physical key (the floor's friction) is no resolution: the report fits nothing against
+/// it, draws no convergence plot for it, and draws the bang's shares against its own values,
+/// the pushes pooled as the ensemble.
+#[test]
+fn a_physical_key_is_drawn_on_its_own_axis_not_fitted_as_a_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("friction");
+    uncoil()
+        .arg("sweep")
+        .arg(yoga())
+        .args(["--vary", "discretisation.links_per_turn=8"])
+        .args(["--vary", "floor.friction=0.3,1.0"])
+        .args(["--vary", "push.contact_speed_m_s=0.3,0.301"])
+        .arg("--out")
+        .arg(&out)
+        .args(["--jobs", "1", "--quiet"])
+        .assert()
+        .success();
+    let report = uncoil()
+        .arg("sweep-report")
+        .arg(&out)
+        .args(["--repeat-key", "push.contact_speed_m_s"])
+        .assert()
+        .success();
+    let text = String::from_utf8(report.get_output().stdout.clone()).unwrap();
+    assert!(text.contains("### `floor.friction`"), "{text}");
+    assert!(
+        !text.contains("| `floor.friction` |"),
+        "fitted as a step: {text}"
+    );
+    assert!(!text.contains("order of the change"), "{text}");
+    assert!(!out.join("convergence-floor.friction.svg").exists());
+    assert!(!out.join("bang-floor.friction.svg").exists());
+    let svg = std::fs::read_to_string(out.join("shares-floor.friction.svg")).unwrap();
+    assert!(svg.contains("floor friction share") && !svg.contains("h of"));
+    crate::support::check_legends(&svg);
+}

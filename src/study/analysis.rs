@@ -14,7 +14,7 @@ mod report;
 use std::collections::BTreeMap;
 
 pub use self::bang::{BANG_OBSERVABLES, BangStudy, NUMERICAL, Reading, bang_studies};
-pub use self::fit::{PowerFit, fit_power, pareto_front, step_size};
+pub use self::fit::{PowerFit, fit_power, is_resolution, pareto_front, step_size};
 
 use crate::study::sweep::{Col, ERR_GEO_PREFIX, RowStatus, STATUS_COLUMN, SweepTable};
 
@@ -233,8 +233,8 @@ fn milestone_errors(table: &SweepTable) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// The convergence studies: one per numeric varied key that is not a repetition and per
-/// setting of the other keys, over the rows that enter the fits (`ok`), where the key
+/// The convergence studies: one per numeric varied resolution key ([`is_resolution`]) that
+/// is not a repetition and per setting of the other keys, over the rows that enter the fits (`ok`), where the key
 /// takes two values or more.
 fn convergence_studies(
     table: &SweepTable,
@@ -244,7 +244,11 @@ fn convergence_studies(
     columns: &StudyColumns<'_>,
 ) -> Vec<Study> {
     let mut studies = Vec::new();
-    for key in keys.iter().filter(|k| !repeats.contains(k)) {
+    // A physical key is no resolution: nothing converges in it.
+    for key in keys
+        .iter()
+        .filter(|k| !repeats.contains(k) && is_resolution(k))
+    {
         let vals: Vec<f64> = table
             .numbers(key)
             .expect("a varied key is a column")

@@ -200,6 +200,17 @@ impl Drawn {
         }
         self.labels.push(label);
     }
+
+    /// Books `points` of `chart`'s data as drawn ink with no legend entry of their own (an
+    /// error bar's ends).
+    fn book_ink<DB, CT>(&mut self, chart: &ChartContext<'_, DB, CT>, points: &[CT::From])
+    where
+        DB: DrawingBackend,
+        CT: CoordTranslate,
+    {
+        let px = points.iter().map(|p| chart.as_coord_spec().translate(p));
+        self.ink.extend(px.map(|p| vec![p]));
+    }
 }
 
 /// Draws `points` as `line` on `chart` under `label`, with a legend swatch drawn as the

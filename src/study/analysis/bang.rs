@@ -5,7 +5,7 @@
 
 use std::collections::BTreeMap;
 
-use super::{PowerFit, fit_power, fitting_rows, step_size};
+use super::{PowerFit, fit_power, fitting_rows, is_resolution, step_size};
 use crate::study::sweep::{Col, SweepTable};
 
 /// How a bang study reads an observable from a sweep row.
@@ -60,9 +60,12 @@ pub struct BangStudy {
     pub key: String,
     /// The other keys' settings, `k=v k=v`.
     pub group: String,
-    /// The key's settings, coarsest first.
+    /// Whether the key is physical ([`is_resolution`]): its settings then run from the
+    /// smallest value up, `h` holds the values themselves and nothing is fitted.
+    pub physical: bool,
+    /// The key's settings, coarsest first (a physical key's, smallest first).
     pub values: Vec<f64>,
-    /// Step sizes ([`step_size`]) of the settings.
+    /// Step sizes ([`step_size`]) of the settings; a physical key's values.
     pub h: Vec<f64>,
     /// Runs (with a bang) per setting.
     pub n: Vec<usize>,
@@ -151,8 +154,16 @@ fn ensemble_study(
         .into_iter()
         .map(|(bits, rs)| (f64::from_bits(bits), rs))
         .collect();
-    settings.sort_by(|a, b| step_size(key, b.0).total_cmp(&step_size(key, a.0)));
-    let h: Vec<f64> = settings.iter().map(|(v, _)| step_size(key, *v)).collect();
+    let physical = !is_resolution(key);
+    if physical {
+        settings.sort_by(|a, b| a.0.total_cmp(&b.0));
+    } else {
+        settings.sort_by(|a, b| step_size(key, b.0).total_cmp(&step_size(key, a.0)));
+    }
+    let h: Vec<f64> = settings
+        .iter()
+        .map(|(v, _)| if physical { *v } else { step_size(key, *v) })
+        .collect();
     let (mut mean, mut se, mut fit) = (Vec::new(), Vec::new(), Vec::new());
     for (v, (_, reading)) in values.iter().zip(BANG_OBSERVABLES) {
         let stats: Vec<(f64, f64)> = settings
@@ -160,7 +171,9 @@ fn ensemble_study(
             .map(|(_, rs)| mean_and_se(rs.iter().map(|&r| v[r])))
             .collect();
         let m: Vec<f64> = stats.iter().map(|s| s.0).collect();
-        if reading == NUMERICAL {
+        if physical {
+            fit.push(None);
+        } else if reading == NUMERICAL {
             fit.push(fit_power(&h, &m));
         } else {
             let finest = *m.last().expect("two settings");
@@ -176,6 +189,7 @@ fn ensemble_study(
     BangStudy {
         key: key.to_owned(),
         group,
+        physical,
         values: settings.iter().map(|s| s.0).collect(),
         n: settings.iter().map(|s| s.1.len()).collect(),
         h,

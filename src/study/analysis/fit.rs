@@ -69,6 +69,14 @@ pub fn fit_power(x: &[f64], y: &[f64]) -> Option<PowerFit> {
     })
 }
 
+/// Whether a varied key is a resolution of the model (its discretisation or its solver),
+/// which a result converges in and whose step size [`step_size`] stands for; any other key
+/// (the tape, the floor, gravity, the push, the stop) is physical: a result depends on it,
+/// and it is drawn on its own axis with its own values, never fitted as a step.
+pub fn is_resolution(key: &str) -> bool {
+    key.starts_with("discretisation.") || key.starts_with("solver.")
+}
+
 /// The step size a setting stands for, so that a convergence order is positive when the
 /// error falls as the setting is refined: a key naming a size in its unit (`_s`, `_m`,
 /// `_rad`, e.g. `solver.max_dt_s`, `solver.bang_step_rad`) is the step itself; any other

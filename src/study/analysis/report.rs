@@ -39,6 +39,10 @@ impl BangStudy {
                 cells.join(" | ")
             );
         }
+        if self.physical {
+            // A physical key's settings are the answer, not steps towards one.
+            return o;
+        }
         let last = self.values.len() - 1;
         let orders: Vec<String> = (0..names.len())
             .map(|k| {
@@ -258,7 +262,10 @@ impl SweepAnalysis {
              ± the standard error of the mean. The last row fits |mean - the finest \
              setting's mean| against the step h by least squares in log-log, where that \
              change exceeds two standard errors somewhere (else: within noise); the \
-             numerical share, which an exact solver would make zero, is fitted itself.\n"
+             numerical share, which an exact solver would make zero, is fitted itself. A \
+             physical key (the tape, the floor, gravity, the push, the stop: not the \
+             discretisation or the solver) is no step: its table has no such row, and its \
+             shares are drawn against its own values.\n"
         );
         for b in &self.bang {
             let _ = writeln!(o, "{}", b.markdown());
