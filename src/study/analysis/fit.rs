@@ -29,7 +29,7 @@ impl PowerFit {
 pub const MIN_FIT_POINTS: usize = 3;
 
 /// Fits `y = C x^order` by least squares on `(log10 x, log10 y)`, using the points where
-/// both are finite and positive; `None` if fewer than [`MIN_FIT_POINTS`] such points or all
+/// both are finite and positive; `None` if fewer than `MIN_FIT_POINTS` (3) such points or all
 /// `x` are equal.
 pub fn fit_power(x: &[f64], y: &[f64]) -> Option<PowerFit> {
     let pts: Vec<(f64, f64)> = x
