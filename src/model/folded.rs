@@ -136,13 +136,8 @@ impl FoldedModel {
                     .contacts()
                     .iter()
                     .map(|c| {
-                        let v = |p: [f64; 2]| Vector::new(p[0], p[1]);
-                        let impulse = FloorImpulse {
-                            normal: v(c.normal_n_s),
-                            friction: v(c.friction_n_s),
-                            arm: v(c.arm_m),
-                            work_j: Some(c.work_j),
-                        };
+                        let impulse =
+                            FloorImpulse::of_chain(c.normal_n_s, c.friction_n_s, c.arm_m, c.work_j);
                         (c.piece, impulse)
                     })
                     .collect()
@@ -279,15 +274,9 @@ fn body_state(b: &Body) -> BodyState {
 
 /// An exact chain's contact as the work split books it, beside its body's index.
 pub(super) fn exact_chain_impulse(c: &exact_chain::ContactImpulse) -> (usize, FloorImpulse) {
-    let v = |p: [f64; 2]| Vector::new(p[0], p[1]);
     (
         c.body,
-        FloorImpulse {
-            normal: v(c.normal_n_s),
-            friction: v(c.friction_n_s),
-            arm: v(c.arm_m),
-            work_j: Some(c.work_j),
-        },
+        FloorImpulse::of_chain(c.normal_n_s, c.friction_n_s, c.arm_m, c.work_j),
     )
 }
 

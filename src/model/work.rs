@@ -97,6 +97,25 @@ pub(super) struct FloorImpulse {
     pub work_j: Option<[f64; 2]>,
 }
 
+impl FloorImpulse {
+    /// A chain's (exact or nodal) impulse at a contact point: normal and friction (N s), the
+    /// arm from the piece's centre of mass (m), and their work as the chain realised it (J).
+    pub(super) fn of_chain(
+        normal: [f64; 2],
+        friction: [f64; 2],
+        arm: [f64; 2],
+        work_j: [f64; 2],
+    ) -> Self {
+        let v = |p: [f64; 2]| Vector::new(p[0], p[1]);
+        Self {
+            normal: v(normal),
+            friction: v(friction),
+            arm: v(arm),
+            work_j: Some(work_j),
+        }
+    }
+}
+
 /// The floor's impulses on everything touching it during the last step (summed over the
 /// engine's substeps), each beside the body it acts on. The sign convention is pinned by the
 /// resting- and sliding-box tests.

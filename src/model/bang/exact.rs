@@ -79,12 +79,7 @@ impl Model {
             .zip(&exact.bodies)
             .zip(&exact.centres)
         {
-            let body = &mut self.world.bodies[h];
-            let arm = rotate([c.x, c.y], b.angle_rad);
-            let origin = Vector::new(b.position_m[0] - arm[0], b.position_m[1] - arm[1]);
-            body.set_position(Pose::new(origin, b.angle_rad), false);
-            body.set_linvel(Vector::new(b.velocity_m_s[0], b.velocity_m_s[1]), false);
-            body.set_angvel(b.spin_rad_s, false);
+            write_body(&mut self.world.bodies[h], b, c);
         }
         exact.written.clear();
         exact.written.extend(
@@ -99,13 +94,8 @@ impl Model {
             .contacts()
             .iter()
             .map(|c| {
-                let v = |p: [f64; 2]| Vector::new(p[0], p[1]);
-                let impulse = work::FloorImpulse {
-                    normal: v(c.normal_n_s),
-                    friction: v(c.friction_n_s),
-                    arm: v(c.arm_m),
-                    work_j: Some(c.work_j),
-                };
+                let impulse =
+                    work::FloorImpulse::of_chain(c.normal_n_s, c.friction_n_s, c.arm_m, c.work_j);
                 (exact.bodies[c.body], impulse)
             })
             .collect()
@@ -197,20 +187,7 @@ impl Model {
         pin: Option<(Vector, Vector)>,
     ) -> ExactBang {
         let free = &self.chain.free;
-        let centres: Vec<Vector> = handles
-            .iter()
-            .map(|&h| {
-                self.world.bodies[h]
-                    .mass_properties()
-                    .local_mprops
-                    .local_com
-            })
-            .collect();
-        let bodies: Vec<Body> = handles
-            .iter()
-            .zip(&centres)
-            .map(|(&h, &c)| exact_body(&self.world.bodies[h], c))
-            .collect();
+        let (centres, bodies) = self.chain_bodies(&handles);
         let at = |v: Vector| [v.x, v.y];
         let joints: Vec<Joint> = (1..free.len())
             .map(|i| Joint {
@@ -218,15 +195,6 @@ impl Model {
                 next: at(self.chain.local[free[i].first][0] - centres[i]),
             })
             .collect();
-        let shortest = free
-            .iter()
-            .map(|p| {
-                self.chain.links[p.first..=p.last]
-                    .iter()
-                    .map(|l| l.length_m)
-                    .sum::<f64>()
-            })
-            .fold(f64::INFINITY, f64::min);
         let mut chain = ExactChain::new(
             bodies,
             joints,
@@ -234,41 +202,14 @@ impl Model {
                 anchor: at(local - centres[0]),
                 at_m: at(world),
             }),
-            Tolerance {
-                // Twice the step rule's turn: room for an impact's spin-up.
-                max_turn_rad: 2.0 * self.settings.bang_step_rad,
-                ..exact_chain::tolerance_for(shortest)
-            },
+            self.chain_tolerance(),
         );
-        // Each piece touches the floor at the corners of its nodes' hull
-        // (`exact_chain::hull_corners`); a node two pieces share (or the pin's) belongs to
-        // the piece before it, which keeps it if it is a corner of either.
         let nodes: Vec<Vec<[f64; 2]>> = free
             .iter()
             .zip(&centres)
             .map(|(&p, &c)| self.piece_nodes(p).map(|n| at(n - c)).collect())
             .collect();
-        let corners: Vec<Vec<bool>> = nodes.iter().map(|n| exact_chain::hull_corners(n)).collect();
-        let points: Vec<Vec<[f64; 2]>> = nodes
-            .iter()
-            .enumerate()
-            .map(|(i, n)| {
-                let skip = i > 0 || pin.is_some();
-                let next_first = corners.get(i + 1).is_some_and(|c| c[0]);
-                (0..n.len())
-                    .filter(|&j| !(skip && j == 0))
-                    .filter(|&j| corners[i][j] || (j + 1 == n.len() && next_first))
-                    .map(|j| n[j])
-                    .collect()
-            })
-            .collect();
-        let floor_y = self.world.colliders[self.floor].translation().y;
-        let floor = Floor {
-            point_m: [0.0, floor_y],
-            normal: [0.0, 1.0],
-            friction: self.settings.friction,
-        };
-        chain.set_floor(floor, &points);
+        chain.set_floor(self.chain_floor(), &contact_points(&nodes, pin.is_some()));
         ExactBang {
             nodes,
             before: (Vec::new(), 0.0),
@@ -285,6 +226,88 @@ impl Model {
             caught_j: 0.0,
         }
     }
+}
+
+impl Model {
+    /// The moving pieces `handles` as the bang's chains (exact or nodal) take them: each
+    /// body's centre of mass in its own frame, and its state about it.
+    pub(super) fn chain_bodies(&self, handles: &[RigidBodyHandle]) -> (Vec<Vector>, Vec<Body>) {
+        let centres: Vec<Vector> = handles
+            .iter()
+            .map(|&h| {
+                self.world.bodies[h]
+                    .mass_properties()
+                    .local_mprops
+                    .local_com
+            })
+            .collect();
+        let bodies = handles
+            .iter()
+            .zip(&centres)
+            .map(|(&h, &c)| exact_body(&self.world.bodies[h], c))
+            .collect();
+        (centres, bodies)
+    }
+
+    /// The bang's chains' tolerance: the exact chain's for its shortest moving piece, a
+    /// body turning at most twice the step rule's turn in a step (room for an impact's
+    /// spin-up).
+    pub(super) fn chain_tolerance(&self) -> Tolerance {
+        let shortest = self
+            .chain
+            .free
+            .iter()
+            .map(|p| {
+                self.chain.links[p.first..=p.last]
+                    .iter()
+                    .map(|l| l.length_m)
+                    .sum::<f64>()
+            })
+            .fold(f64::INFINITY, f64::min);
+        Tolerance {
+            max_turn_rad: 2.0 * self.settings.bang_step_rad,
+            ..exact_chain::tolerance_for(shortest)
+        }
+    }
+
+    /// The floor as the bang's chains see it.
+    pub(super) fn chain_floor(&self) -> Floor {
+        Floor {
+            point_m: [0.0, self.world.colliders[self.floor].translation().y],
+            normal: [0.0, 1.0],
+            friction: self.settings.friction,
+        }
+    }
+}
+
+/// Each piece's contact points, from its `nodes`: the corners of their hull
+/// (`exact_chain::hull_corners`). A node two pieces share (or the pin's, if `pinned`)
+/// belongs to the piece before it, which keeps it if it is a corner of either.
+pub(super) fn contact_points(nodes: &[Vec<[f64; 2]>], pinned: bool) -> Vec<Vec<[f64; 2]>> {
+    let corners: Vec<Vec<bool>> = nodes.iter().map(|n| exact_chain::hull_corners(n)).collect();
+    nodes
+        .iter()
+        .enumerate()
+        .map(|(i, n)| {
+            let skip = i > 0 || pinned;
+            let next_first = corners.get(i + 1).is_some_and(|c| c[0]);
+            (0..n.len())
+                .filter(|&j| !(skip && j == 0))
+                .filter(|&j| corners[i][j] || (j + 1 == n.len() && next_first))
+                .map(|j| n[j])
+                .collect()
+        })
+        .collect()
+}
+
+/// Writes a chain's state `b` of a piece back to its engine body, whose centre of mass
+/// sits at `centre` in the body's own frame.
+pub(super) fn write_body(body: &mut RigidBody, b: &Body, centre: Vector) {
+    let arm = rotate([centre.x, centre.y], b.angle_rad);
+    let origin = Vector::new(b.position_m[0] - arm[0], b.position_m[1] - arm[1]);
+    body.set_position(Pose::new(origin, b.angle_rad), false);
+    body.set_linvel(Vector::new(b.velocity_m_s[0], b.velocity_m_s[1]), false);
+    body.set_angvel(b.spin_rad_s, false);
 }
 
 /// An engine body's pose and velocity.

@@ -6,7 +6,7 @@
 //! rebuilt, so no velocity is handed back and forth.
 
 use super::*;
-use crate::model::exact_chain::{self, Body, Floor, SolveStats, StepError, Tolerance};
+use crate::model::exact_chain::{SolveStats, StepError};
 use crate::model::nodal::{self, NodalChain, StepReport};
 
 /// The nodal chain of the bang's moving pieces, and how its steps went.
@@ -69,26 +69,15 @@ impl Model {
             }
         }
         for (i, (&h, &c)) in nb.bodies.iter().zip(&nb.centres).enumerate() {
-            let b = nb.chain.body(i);
-            let body = &mut self.world.bodies[h];
-            let arm = rotate([c.x, c.y], b.angle_rad);
-            let origin = Vector::new(b.position_m[0] - arm[0], b.position_m[1] - arm[1]);
-            body.set_position(Pose::new(origin, b.angle_rad), false);
-            body.set_linvel(Vector::new(b.velocity_m_s[0], b.velocity_m_s[1]), false);
-            body.set_angvel(b.spin_rad_s, false);
+            exact::write_body(&mut self.world.bodies[h], &nb.chain.body(i), c);
         }
         self.bang.solve = nb.stats;
-        let v = |p: [f64; 2]| Vector::new(p[0], p[1]);
         nb.chain
             .contacts()
             .iter()
             .map(|c| {
-                let impulse = work::FloorImpulse {
-                    normal: v(c.normal_n_s),
-                    friction: v(c.friction_n_s),
-                    arm: v(c.arm_m),
-                    work_j: Some(c.work_j),
-                };
+                let impulse =
+                    work::FloorImpulse::of_chain(c.normal_n_s, c.friction_n_s, c.arm_m, c.work_j);
                 (nb.bodies[c.piece], impulse)
             })
             .collect()
@@ -194,20 +183,7 @@ impl Model {
     /// its `caught_j`.
     fn build_nodal(&self, handles: Vec<RigidBodyHandle>) -> Result<NodalBang, StepError> {
         let free = &self.chain.free;
-        let centres: Vec<Vector> = handles
-            .iter()
-            .map(|&h| {
-                self.world.bodies[h]
-                    .mass_properties()
-                    .local_mprops
-                    .local_com
-            })
-            .collect();
-        let bodies: Vec<Body> = handles
-            .iter()
-            .zip(&centres)
-            .map(|(&h, &c)| exact::exact_body(&self.world.bodies[h], c))
-            .collect();
+        let (centres, bodies) = self.chain_bodies(&handles);
         let at = |v: Vector| [v.x, v.y];
         let ends: Vec<[[f64; 2]; 2]> = free
             .iter()
@@ -219,20 +195,7 @@ impl Model {
                 ]
             })
             .collect();
-        let shortest = free
-            .iter()
-            .map(|p| {
-                self.chain.links[p.first..=p.last]
-                    .iter()
-                    .map(|l| l.length_m)
-                    .sum::<f64>()
-            })
-            .fold(f64::INFINITY, f64::min);
-        let tolerance = Tolerance {
-            // Twice the step rule's turn: room for an impact's spin-up.
-            max_turn_rad: 2.0 * self.settings.bang_step_rad,
-            ..exact_chain::tolerance_for(shortest)
-        };
+        let tolerance = self.chain_tolerance();
         let pinned = self.first_pin().is_some();
         let potential_before: f64 = handles
             .iter()
@@ -243,9 +206,8 @@ impl Model {
         // Laying the nodes from the first along the bodies' angles closes the engine's
         // joints' gaps (microns): that moves the potential by as little.
         let moved = potential_before - chain.potential_j(gravity);
-        // Each piece touches the floor at the corners of its nodes' hull
-        // (`exact_chain::hull_corners`); a node two pieces share (or the pin's) belongs to
-        // the piece before it, which keeps it if it is a corner of either.
+        // Each piece touches the floor at the corners of its nodes' hull, as on the exact
+        // chain (`exact::contact_points`).
         let nodes: Vec<Vec<[f64; 2]>> = free
             .iter()
             .zip(&centres)
@@ -256,27 +218,7 @@ impl Model {
                     .collect()
             })
             .collect();
-        let corners: Vec<Vec<bool>> = nodes.iter().map(|n| exact_chain::hull_corners(n)).collect();
-        let points: Vec<Vec<[f64; 2]>> = nodes
-            .iter()
-            .enumerate()
-            .map(|(i, n)| {
-                let skip = i > 0 || pinned;
-                let next_first = corners.get(i + 1).is_some_and(|c| c[0]);
-                (0..n.len())
-                    .filter(|&j| !(skip && j == 0))
-                    .filter(|&j| corners[i][j] || (j + 1 == n.len() && next_first))
-                    .map(|j| n[j])
-                    .collect()
-            })
-            .collect();
-        let floor_y = self.world.colliders[self.floor].translation().y;
-        let floor = Floor {
-            point_m: [0.0, floor_y],
-            normal: [0.0, 1.0],
-            friction: self.settings.friction,
-        };
-        chain.set_floor(floor, &points);
+        chain.set_floor(self.chain_floor(), &exact::contact_points(&nodes, pinned));
         Ok(NodalBang {
             chain,
             bodies: handles,

@@ -130,13 +130,8 @@ impl ExactBench {
             .contacts()
             .iter()
             .map(|c| {
-                let v = |p: [f64; 2]| Vector::new(p[0], p[1]);
-                let impulse = FloorImpulse {
-                    normal: v(c.normal_n_s),
-                    friction: v(c.friction_n_s),
-                    arm: v(c.arm_m),
-                    work_j: Some(c.work_j),
-                };
+                let impulse =
+                    FloorImpulse::of_chain(c.normal_n_s, c.friction_n_s, c.arm_m, c.work_j);
                 (c.body, impulse)
             })
             .collect();
