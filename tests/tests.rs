@@ -14,6 +14,7 @@ mod paths;
 mod readme;
 mod scene_files;
 mod sim;
+mod study;
 mod support;
 mod sweep;
 mod variants;

@@ -11,7 +11,7 @@ use clap::{Args, ValueEnum};
 
 use uncoil::output::{shell_word, write_atomic};
 use uncoil::run::signals;
-use uncoil::scene::overrides::scene_with_overrides;
+use uncoil::scene::overrides::{Override, scene_with_overrides};
 use uncoil::scene::read_scene_file;
 use uncoil::scene::shipped;
 use uncoil::study::analysis::{Reference, SweepAnalysis};
@@ -26,8 +26,11 @@ pub struct SweepArgs {
     /// shipped scene's name, e.g. yoga-mat.
     #[arg(required_unless_present = "merge")]
     scene: Option<PathBuf>,
-    /// A key and its values, e.g. `--vary discretisation.links_per_turn=16,32,64`; several
-    /// give the product grid (the last varies fastest). One value fixes a key.
+    /// A key and its values, e.g. `--vary discretisation.links_per_turn=16,32,64`; an even
+    /// range, `A..B/N` (N values from A to B), e.g. `push.contact_speed_m_s=0.100..0.107/8`;
+    /// or keys varied together, their values side by side, e.g.
+    /// `tape.thickness_m:solver.bang_piece_m=0.003:0.015,0.001:0.005`. Several give the
+    /// product grid (the last varies fastest). One value fixes a key.
     #[arg(long = "vary", value_name = "KEY=V1,V2,...")]
     vary: Vec<Vary>,
     /// Run only the K-th of N interleaved slices of the grid (for array jobs), into
@@ -103,7 +106,9 @@ pub struct ReportArgs {
     #[arg(long, value_name = "ERROR,WALL_S", value_parser = parse_target)]
     target: Option<(f64, f64)>,
     /// A varied key whose values are repetitions (e.g. `--vary name=rep1,rep2,rep3`): runs
-    /// that differ only in it are fitted together (repeatable).
+    /// that differ only in it are pooled as one setting's ensemble (repeatable). Default:
+    /// push.contact_speed_m_s where another key is varied too, the pushes of an ensemble;
+    /// `none` pools nothing.
     #[arg(long, value_name = "KEY")]
     repeat_key: Vec<String>,
     /// No convergence fits or plots: the Pareto plot and the table only.
@@ -226,29 +231,31 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<Exit> {
     }
     // A key varied twice would be two columns of one name in sweep.csv, and a grid no merge
     // could check.
-    if let Some(twice) = args
-        .vary
+    let keys: Vec<&String> = args.vary.iter().flat_map(|v| &v.keys).collect();
+    if let Some((_, twice)) = keys
         .iter()
         .enumerate()
-        .find(|(k, v)| args.vary[..*k].iter().any(|w| w.key == v.key))
+        .find(|(k, v)| keys[..*k].contains(v))
     {
         return Err(Usage(format!(
-            "--vary {}: varied twice; give all its values in one --vary",
-            twice.1.key
+            "--vary {twice}: varied twice; give all its values in one --vary"
         ))
         .into());
     }
     // A value given twice would be two runs of one combination, which no merge takes.
     for v in &args.vary {
+        let same_setting =
+            |a: &[Override], b: &[Override]| a.iter().zip(b).all(|(x, y)| same(&x.value, &y.value));
         if let Some((_, twice)) = v
             .values
             .iter()
             .enumerate()
-            .find(|(k, x)| v.values[..*k].iter().any(|y| same(&y.value, &x.value)))
+            .find(|(k, x)| v.values[..*k].iter().any(|y| same_setting(x, y)))
         {
             return Err(Usage(format!(
                 "--vary {}: the value {} is given twice",
-                v.key, twice.raw
+                v.name(),
+                Vary::raw(twice)
             ))
             .into());
         }
@@ -351,6 +358,33 @@ pub fn report(args: &ReportArgs) -> anyhow::Result<Exit> {
     Ok(Exit::Ok)
 }
 
+/// The key whose values are an ensemble's pushes, pooled by default.
+const PUSH_KEY: &str = "push.contact_speed_m_s";
+
+/// The keys pooled as repetitions: those given (`none`: no key), or by default the pushes
+/// where another key is varied beside them (a sweep of the pushes alone draws them as a
+/// key of their own).
+fn repeat_keys(given: &[String], varied: &[String]) -> anyhow::Result<Vec<String>> {
+    if given.iter().any(|k| k == "none") {
+        if given.len() > 1 {
+            anyhow::bail!(Usage(
+                "--repeat-key none: no key is a repetition; give it alone".into()
+            ));
+        }
+        return Ok(Vec::new());
+    }
+    if let Some(k) = given.iter().find(|k| !varied.contains(k)) {
+        anyhow::bail!(Usage(format!(
+            "--repeat-key {k}: not a varied key of this sweep (varied: {})",
+            varied.join(", ")
+        )));
+    }
+    if given.is_empty() && varied.len() > 1 && varied.iter().any(|k| k == PUSH_KEY) {
+        return Ok(vec![PUSH_KEY.to_owned()]);
+    }
+    Ok(given.to_vec())
+}
+
 fn write_report(args: &ReportArgs, sweep: &Path) -> anyhow::Result<String> {
     let table = SweepTable::read(sweep)?;
     let reference = match args.reference {
@@ -369,13 +403,8 @@ fn write_report(args: &ReportArgs, sweep: &Path) -> anyhow::Result<String> {
             .unwrap_or_else(|| "sweep".into())
     });
     let varied = table.varied_keys();
-    if let Some(k) = args.repeat_key.iter().find(|k| !varied.contains(k)) {
-        anyhow::bail!(Usage(format!(
-            "--repeat-key {k}: not a varied key of this sweep (varied: {})",
-            varied.join(", ")
-        )));
-    }
-    let mut analysis = SweepAnalysis::new(table, reference, cost, &args.repeat_key)?;
+    let repeats = repeat_keys(&args.repeat_key, &varied)?;
+    let mut analysis = SweepAnalysis::new(table, reference, cost, &repeats)?;
     analysis.target = args.target;
     if args.no_convergence {
         analysis.studies.clear();

@@ -13,7 +13,9 @@ mod report;
 
 use std::collections::BTreeMap;
 
-pub use self::bang::{BANG_OBSERVABLES, BangStudy, NUMERICAL, Reading, bang_studies};
+pub use self::bang::{
+    BANG_OBSERVABLES, BangStudy, NUMERICAL, NUMERICAL_MARK, Reading, bang_studies,
+};
 pub use self::fit::{PowerFit, fit_power, is_resolution, pareto_front, step_size};
 
 use crate::study::sweep::{Col, ERR_GEO_PREFIX, RowStatus, STATUS_COLUMN, SweepTable};
@@ -105,6 +107,8 @@ pub struct SweepAnalysis {
     pub studies: Vec<Study>,
     /// A target to report against: (largest error, largest cost in s).
     pub target: Option<(f64, f64)>,
+    /// The varied keys pooled as repetitions.
+    pub repeats: Vec<String>,
     /// The final bang's ensembles, if the sweep has bang columns.
     pub bang: Vec<BangStudy>,
 }
@@ -186,6 +190,7 @@ impl SweepAnalysis {
             front,
             studies,
             target: None,
+            repeats: repeats.to_vec(),
         })
     }
 
@@ -204,6 +209,43 @@ impl SweepAnalysis {
 }
 
 /// The cell of varied key `k` in row `r`.
+/// The varied keys that were varied together with an earlier one (`--vary A:B=...`): each
+/// such key mapped to that earlier key, its lead. A key is tied to a lead when each takes
+/// two values or more and each one's value fixes the other's over every row, which a
+/// product grid never gives and keys varied together always do.
+pub fn tied_keys(table: &SweepTable) -> BTreeMap<String, String> {
+    let keys = table.varied_keys();
+    let column = |k: &str| -> Vec<&str> {
+        let c = table.column(k).expect("a varied key is a column");
+        table.rows.iter().map(|r| r[c].as_str()).collect()
+    };
+    // Whether `a`'s value fixes `b`'s in every row.
+    let fixes = |a: &[&str], b: &[&str]| {
+        let mut seen: BTreeMap<&str, &str> = BTreeMap::new();
+        a.iter()
+            .zip(b)
+            .all(|(x, y)| *seen.entry(x).or_insert(y) == *y)
+    };
+    let distinct = |v: &[&str]| v.iter().collect::<std::collections::BTreeSet<_>>().len();
+    let mut tied = BTreeMap::new();
+    for (j, follower) in keys.iter().enumerate() {
+        let f = column(follower);
+        if distinct(&f) < 2 {
+            continue;
+        }
+        let lead = keys[..j].iter().find(|lead| {
+            !tied.contains_key(*lead) && {
+                let l = column(lead);
+                fixes(&l, &f) && fixes(&f, &l)
+            }
+        });
+        if let Some(lead) = lead {
+            tied.insert(follower.clone(), lead.clone());
+        }
+    }
+    tied
+}
+
 fn cell(table: &SweepTable, r: usize, k: &str) -> String {
     let c = table.column(k).expect("a varied key is a column");
     table.rows[r][c].clone()
@@ -244,6 +286,13 @@ fn convergence_studies(
     columns: &StudyColumns<'_>,
 ) -> Vec<Study> {
     let mut studies = Vec::new();
+    // A key varied with another is that key's companion, neither studied nor grouped by.
+    let tied = tied_keys(table);
+    let keys: Vec<String> = keys
+        .iter()
+        .filter(|k| !tied.contains_key(*k))
+        .cloned()
+        .collect();
     // A physical key is no resolution: nothing converges in it.
     for key in keys
         .iter()
@@ -257,7 +306,7 @@ fn convergence_studies(
         if vals.iter().any(|v| !v.is_finite()) {
             continue; // not numeric (e.g. contact.model)
         }
-        for (group, rows) in groups_of_others(table, keys, key, repeats, ok) {
+        for (group, rows) in groups_of_others(table, &keys, key, repeats, ok) {
             if let Some(study) = columns.study(key, group, rows, &vals) {
                 studies.push(study);
             }

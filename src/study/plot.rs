@@ -9,6 +9,7 @@
 //! `legend_spot`); a run's pictures are in `run`, a sweep's in `sweep`.
 
 mod run;
+mod shares;
 mod sweep;
 mod ticks;
 

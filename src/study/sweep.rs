@@ -11,6 +11,7 @@
 mod grid;
 mod row;
 mod table;
+mod vary;
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -106,7 +107,7 @@ impl Sweep {
         let combos = grid(varies);
         let scenes = scenes(text, name, &combos)?;
         Ok(Self {
-            keys: varies.iter().map(|v| v.key.clone()).collect(),
+            keys: varies.iter().flat_map(|v| v.keys.iter().cloned()).collect(),
             combos,
             scenes,
             grid: GridFile::new(text, name, varies, Shard::ALL),
@@ -131,10 +132,15 @@ impl Sweep {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create output folder {}", dir.display()))?;
         let path = dir.join(file_name(opts.shard));
-        let labels: Vec<String> = milestone_radii(&self.scenes[0])
-            .into_iter()
-            .map(|(l, _)| l.to_string())
-            .collect();
+        // Every milestone any combination has, in the order first met: a core changes them
+        // (laid fractions instead of radii).
+        let mut labels: Vec<String> = Vec::new();
+        for l in self.scenes.iter().flat_map(milestone_radii) {
+            let l = l.0.to_string();
+            if !labels.contains(&l) {
+                labels.push(l);
+            }
+        }
         let header = header(&self.keys, &labels);
         let grid = self.grid.clone().for_shard(opts.shard);
         let grid_path = GridFile::beside(&path);
@@ -167,6 +173,7 @@ impl Sweep {
             sweep: self,
             path: &path,
             header: &header,
+            labels: &labels,
             file: Mutex::new(file),
             jobs: pool.current_num_threads(),
             total: mine.len(),
@@ -295,6 +302,8 @@ struct Runner<'a> {
     sweep: &'a Sweep,
     path: &'a Path,
     header: &'a [String],
+    /// The milestones' labels the header's error columns are for.
+    labels: &'a [String],
     file: Mutex<File>,
     /// Worker threads, recorded in each row.
     jobs: usize,
@@ -376,7 +385,7 @@ impl Runner<'_> {
 
     /// Completes the row of a run that ended and returns its progress note.
     fn finished_row(&self, row: &mut Vec<String>, report: &RunReport) -> String {
-        row.extend(result_cells(report, self.jobs));
+        row.extend(result_cells(report, self.jobs, self.labels));
         if report.stop.guard().is_some() {
             *self.stopped.lock().expect("no panic holds the lock") += 1;
         }

@@ -5,7 +5,7 @@
 
 use std::collections::BTreeMap;
 
-use super::{PowerFit, fit_power, fitting_rows, is_resolution, step_size};
+use super::{PowerFit, fit_power, fitting_rows, is_resolution, step_size, tied_keys};
 use crate::study::sweep::{Col, SweepTable};
 
 /// How a bang study reads an observable from a sweep row.
@@ -23,7 +23,7 @@ pub enum Reading {
 
 /// The final bang's observables a bang study follows: a label and how to read it from a
 /// sweep row (`NaN` where the run has no bang).
-pub const BANG_OBSERVABLES: [(&str, Reading); 10] = [
+pub const BANG_OBSERVABLES: [(&str, Reading); 12] = [
     ("dissipated / kinetic in", Reading::DissipatedOfKineticIn),
     (
         "floor normal share",
@@ -33,6 +33,7 @@ pub const BANG_OBSERVABLES: [(&str, Reading); 10] = [
         "floor friction share",
         Reading::Column(Col::BangFloorFrictionOf),
     ),
+    ("freezing share", Reading::Column(Col::BangFreezeOf)),
     ("numerical share", NUMERICAL),
     ("top speed (m/s)", Reading::Column(Col::BangTopSpeed)),
     ("duration (s)", Reading::Column(Col::BangDuration)),
@@ -46,7 +47,16 @@ pub const BANG_OBSERVABLES: [(&str, Reading); 10] = [
     ),
     ("end short of flat (m)", Reading::ShortOfFlat),
     ("bang wall / unroll wall", Reading::CostOfUnroll),
+    (
+        "still moving / kinetic in",
+        Reading::Column(Col::BangStillMovingOf),
+    ),
 ];
+
+/// A setting whose numerical share (joints and residual, of what the bang dissipated)
+/// exceeds this in size is marked in the tables and the pictures: its split is not the
+/// physics' alone.
+pub const NUMERICAL_MARK: f64 = 0.01;
 
 /// The numerical share, whose limit is zero: its order is fitted to the mean itself.
 pub const NUMERICAL: Reading = Reading::Column(Col::BangNumericalOf);
@@ -58,6 +68,8 @@ pub const NUMERICAL: Reading = Reading::Column(Col::BangNumericalOf);
 pub struct BangStudy {
     /// The varied key.
     pub key: String,
+    /// Keys varied together with it ([`tied_keys`]), each a function of it.
+    pub tied: Vec<String>,
     /// The other keys' settings, `k=v k=v`.
     pub group: String,
     /// Whether the key is physical ([`is_resolution`]): its settings then run from the
@@ -105,10 +117,16 @@ pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
             Reading::Column(c) => col(c).unwrap_or_else(|| vec![f64::NAN; rows]),
         })
         .collect();
-    let keys = table.varied_keys();
+    let tied = tied_keys(table);
+    // A key varied with another (a function of it) is studied as that key's companion.
+    let keys: Vec<String> = table
+        .varied_keys()
+        .into_iter()
+        .filter(|k| !repeats.contains(k) && !tied.contains_key(k))
+        .collect();
     let cell = |r: usize, k: &str| table.rows[r][table.column(k).expect("a varied key")].clone();
     let mut studies = Vec::new();
-    for key in keys.iter().filter(|k| !repeats.contains(k)) {
+    for key in &keys {
         let Some(vals) = table
             .numbers(key)
             .filter(|v| v.iter().all(|x| x.is_finite()))
@@ -121,7 +139,7 @@ pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
         for r in (0..rows).filter(|&r| fits[r] && kin[r].is_finite() && duration[r] > 0.0) {
             let g = keys
                 .iter()
-                .filter(|k| *k != key && !repeats.contains(k))
+                .filter(|k| *k != key)
                 .map(|k| format!("{k}={}", cell(r, k)))
                 .collect::<Vec<_>>()
                 .join(" ");
@@ -136,10 +154,27 @@ pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
             if by_value.len() < 2 {
                 continue;
             }
-            studies.push(ensemble_study(key, group, by_value, &values));
+            let mut study = ensemble_study(key, group, by_value, &values);
+            study.tied = tied
+                .iter()
+                .filter(|(_, lead)| *lead == key)
+                .map(|(k, _)| k.clone())
+                .collect();
+            studies.push(study);
         }
     }
     studies
+}
+
+impl BangStudy {
+    /// Whether setting `i`'s numerical share exceeds [`NUMERICAL_MARK`] in size.
+    pub fn numerical_marked(&self, i: usize) -> bool {
+        let k = BANG_OBSERVABLES
+            .iter()
+            .position(|o| o.1 == NUMERICAL)
+            .expect("the numerical share is observed");
+        self.mean[k][i].abs() > NUMERICAL_MARK
+    }
 }
 
 /// The bang study of `key` in one group: `by_value` holds the rows of each setting (by the
@@ -188,6 +223,7 @@ fn ensemble_study(
     }
     BangStudy {
         key: key.to_owned(),
+        tied: Vec::new(),
         group,
         physical,
         values: settings.iter().map(|s| s.0).collect(),

@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 
 use super::fit::MIN_FIT_POINTS;
-use super::{BANG_OBSERVABLES, BangStudy, NUMERICAL, PowerFit, SweepAnalysis};
+use super::{BANG_OBSERVABLES, BangStudy, NUMERICAL, NUMERICAL_MARK, PowerFit, SweepAnalysis};
 use crate::study::sweep::{INDEX_COLUMN, STATUS_COLUMN, SweepTable};
 
 impl BangStudy {
@@ -14,16 +14,17 @@ impl BangStudy {
     /// setting, and whether that change is within two standard errors.
     pub fn markdown(&self) -> String {
         let mut o = String::new();
-        let _ = writeln!(
-            o,
-            "### `{}`{}\n",
-            self.key,
-            if self.group.is_empty() {
-                String::new()
-            } else {
-                format!(" ({})", self.group)
-            }
-        );
+        let with = if self.tied.is_empty() {
+            String::new()
+        } else {
+            format!(", varied together with `{}`", self.tied.join("`, `"))
+        };
+        let group = if self.group.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", self.group)
+        };
+        let _ = writeln!(o, "### `{}`{with}{group}\n", self.key);
         let names: Vec<&str> = BANG_OBSERVABLES.iter().map(|o| o.0).collect();
         let _ = writeln!(o, "| {} | runs | {} |", self.key, names.join(" | "));
         let _ = writeln!(o, "|---|---|{}", "---|".repeat(names.len()));
@@ -33,10 +34,19 @@ impl BangStudy {
                 .collect();
             let _ = writeln!(
                 o,
-                "| {} | {} | {} |",
+                "| {}{} | {} | {} |",
                 self.values[i],
+                if self.numerical_marked(i) { " (!)" } else { "" },
                 self.n[i],
                 cells.join(" | ")
+            );
+        }
+        if (0..self.values.len()).any(|i| self.numerical_marked(i)) {
+            let _ = writeln!(
+                o,
+                "\n(!): the numerical share exceeds {} % in size: the split there is not the \
+                 physics' alone.",
+                100.0 * NUMERICAL_MARK
             );
         }
         if self.physical {
@@ -267,6 +277,13 @@ impl SweepAnalysis {
              discretisation or the solver) is no step: its table has no such row, and its \
              shares are drawn against its own values.\n"
         );
+        if !self.repeats.is_empty() {
+            let _ = writeln!(
+                o,
+                "Pooled as the repetitions of each setting: `{}`.\n",
+                self.repeats.join("`, `")
+            );
+        }
         for b in &self.bang {
             let _ = writeln!(o, "{}", b.markdown());
         }
@@ -410,4 +427,49 @@ fn settings_cells(t: &SweepTable, keys: &[String], r: usize) -> String {
         .map(|k| t.rows[r][t.column(k).expect("a varied key is a column")].clone())
         .collect::<Vec<_>>()
         .join(" | ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A physical key's study of two settings whose numerical shares are `numerical`.
+    fn study(numerical: [f64; 2]) -> BangStudy {
+        let n = BANG_OBSERVABLES.len();
+        let k = BANG_OBSERVABLES
+            .iter()
+            .position(|o| o.1 == NUMERICAL)
+            .unwrap();
+        let mut mean = vec![vec![0.5, 0.5]; n];
+        mean[k] = numerical.to_vec();
+        BangStudy {
+            key: "floor.friction".into(),
+            tied: vec!["solver.bang_step_rad".into()],
+            group: String::new(),
+            physical: true,
+            values: vec![0.3, 1.0],
+            h: vec![0.3, 1.0],
+            n: vec![8, 8],
+            mean,
+            se: vec![vec![0.01, 0.01]; n],
+            fit: vec![None; n],
+        }
+    }
+
+    #[test]
+    fn a_setting_whose_numerical_share_exceeds_the_mark_is_marked_not_dropped() {
+        let md = study([0.004, -0.02]).markdown();
+        assert!(md.contains("| 0.3 | 8 |"), "{md}");
+        assert!(md.contains("| 1 (!) | 8 |"), "{md}");
+        assert!(
+            md.contains("(!): the numerical share exceeds 1 % in size"),
+            "{md}"
+        );
+        assert!(
+            md.contains("varied together with `solver.bang_step_rad`"),
+            "{md}"
+        );
+        let md = study([0.004, 0.0099]).markdown();
+        assert!(!md.contains("(!)"), "{md}");
+    }
 }

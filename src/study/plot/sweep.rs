@@ -314,7 +314,7 @@ fn bang_plots(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<Vec<
     for key in physical {
         let studies: Vec<&BangStudy> = a.bang.iter().filter(|b| b.key == key).collect();
         let path = dir.join(format!("shares-{key}.svg"));
-        shares_plot(&path, key, &studies, title)?;
+        super::shares::shares_plot(&path, key, &studies, title)?;
         written.push(path);
     }
     let keys: Vec<&str> = a.bang.iter().map(|b| b.key.as_str()).collect();
@@ -335,7 +335,7 @@ fn bang_plots(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<Vec<
 /// One panel per bang observable: its ensemble mean ± standard error against the step h
 /// of the study's key (log h).
 fn bang_study_plot(path: &Path, b: &BangStudy, title: &str) -> anyhow::Result<()> {
-    let root = SVGBackend::new(path, (1000, 1400)).into_drawing_area();
+    let root = SVGBackend::new(path, (1000, 1650)).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
     let (head, body) = root.split_vertically(40);
     head.draw(&Text::new(
@@ -352,7 +352,7 @@ fn bang_study_plot(path: &Path, b: &BangStudy, title: &str) -> anyhow::Result<()
         font(DESC_PX),
     ))
     .map_err(err)?;
-    let panels = body.split_evenly((5, 2));
+    let panels = body.split_evenly((6, 2));
     let (h0, h1) = log_range(b.h.iter().copied());
     for (k, panel) in panels.iter().enumerate().take(BANG_OBSERVABLES.len()) {
         let (m, se) = (&b.mean[k], &b.se[k]);
@@ -394,89 +394,6 @@ fn bang_study_plot(path: &Path, b: &BangStudy, title: &str) -> anyhow::Result<()
                     }),
             )
             .map_err(err)?;
-    }
-    root.present().map_err(err)?;
-    Ok(())
-}
-
-/// `shares-KEY.svg`: what the bang dissipated and its shares by mechanism against the
-/// values of a physical key, one line per setting of the other keys (`studies`, one each),
-/// each point the ensemble's mean with its standard error.
-fn shares_plot(path: &Path, key: &str, studies: &[&BangStudy], title: &str) -> anyhow::Result<()> {
-    let root = SVGBackend::new(path, (1000, 800)).into_drawing_area();
-    root.fill(&WHITE).map_err(err)?;
-    let (head, body) = root.split_vertically(40);
-    head.draw(&Text::new(
-        format!(
-            "{title}: where the bang's energy goes against {key} (ensemble mean ± standard error)"
-        ),
-        (20, 12),
-        font(DESC_PX),
-    ))
-    .map_err(err)?;
-    let (x0, x1) = range(studies.iter().flat_map(|b| b.values.iter().copied()));
-    // The first four observables: dissipated / kinetic in, and the three shares.
-    for (k, panel) in body.split_evenly((2, 2)).iter().enumerate() {
-        let bars = |b: &&BangStudy| {
-            let (m, se) = (&b.mean[k], &b.se[k]);
-            (0..m.len())
-                .map(|i| {
-                    (
-                        b.values[i],
-                        m[i],
-                        if se[i].is_finite() { se[i] } else { 0.0 },
-                    )
-                })
-                .filter(|p| p.0.is_finite() && p.1.is_finite())
-                .collect::<Vec<_>>()
-        };
-        let (y0, y1) = range(
-            studies
-                .iter()
-                .flat_map(bars)
-                .flat_map(|(_, m, s)| [m - s, m + s]),
-        );
-        let mut chart = ChartBuilder::on(panel)
-            .caption(BANG_OBSERVABLES[k].0, font(DESC_PX))
-            .margin(8)
-            .x_label_area_size(X_LABEL_AREA_PX)
-            .y_label_area_size(Y_LABEL_AREA_PX)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(err)?;
-        chart
-            .configure_mesh()
-            .x_desc(key)
-            .y_labels(6)
-            .label_style(font(TICK_PX))
-            .axis_desc_style(font(DESC_PX))
-            .light_line_style(WHITE.mix(0.0))
-            .draw()
-            .map_err(err)?;
-        let mut drawn = Drawn::default();
-        for (i, b) in studies.iter().enumerate() {
-            let c = color(i);
-            let pts = bars(b);
-            let label = if b.group.is_empty() {
-                "runs".to_owned()
-            } else {
-                b.group.clone()
-            };
-            let line: Vec<(f64, f64)> = pts.iter().map(|p| (p.0, p.1)).collect();
-            draw_line(&mut chart, &mut drawn, line, Line::solid(c, 1), label)?;
-            let ends: Vec<(f64, f64)> = pts
-                .iter()
-                .flat_map(|&(x, m, s)| [(x, m - s), (x, m + s)])
-                .collect();
-            drawn.book_ink(&chart, &ends);
-            chart
-                .draw_series(
-                    pts.iter().map(|&(x, m, s)| {
-                        ErrorBar::new_vertical(x, m - s, m, m + s, c.filled(), 6)
-                    }),
-                )
-                .map_err(err)?;
-        }
-        legend(&mut chart, &drawn)?;
     }
     root.present().map_err(err)?;
     Ok(())

@@ -6,45 +6,10 @@
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
-use crate::scene::overrides::{Override, OverrideSyntaxError, check_key, scene_with_overrides};
+use crate::scene::overrides::{Override, OverrideSyntaxError, scene_with_overrides};
 use crate::scene::{Scene, SceneError};
 
-/// One `--vary KEY=V1,V2,...`: a key and the values it takes.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Vary {
-    /// Dotted scene key.
-    pub key: String,
-    /// The values, in the order given.
-    pub values: Vec<Override>,
-}
-
-impl FromStr for Vary {
-    type Err = OverrideSyntaxError;
-
-    fn from_str(arg: &str) -> Result<Self, Self::Err> {
-        let fail = |rule: &str| OverrideSyntaxError {
-            arg: arg.to_owned(),
-            rule: rule.to_owned(),
-        };
-        let (key, list) = arg
-            .split_once('=')
-            .ok_or_else(|| fail("expected KEY=V1,V2,..., e.g. solver.iterations=2,4,8"))?;
-        let key = key.trim();
-        check_key(key).map_err(|r| fail(&r))?;
-        let mut values = Vec::new();
-        for raw in split_top_level(list) {
-            let raw = raw.trim();
-            if raw.is_empty() {
-                return Err(fail("empty value in the list"));
-            }
-            values.push(Override::new(key, raw));
-        }
-        Ok(Self {
-            key: key.to_owned(),
-            values,
-        })
-    }
-}
+pub use super::vary::Vary;
 
 /// `--shard K/N`: the K-th (1-based) of N slices of the grid; combination `i` belongs to
 /// shard `i mod N + 1`, so slices are interleaved and of nearly equal cost.
@@ -101,9 +66,9 @@ pub fn grid(varies: &[Vary]) -> Vec<Combination> {
         combos = combos
             .into_iter()
             .flat_map(|c| {
-                v.values.iter().map(move |o| {
+                v.values.iter().map(move |setting| {
                     let mut c = c.clone();
-                    c.push(o.clone());
+                    c.extend(setting.iter().cloned());
                     c
                 })
             })
@@ -189,12 +154,7 @@ impl GridFile {
             scene_fnv1a: format!("{:016x}", crate::output::folder::fnv1a(text.as_bytes())),
             vary: varies
                 .iter()
-                .map(|v| {
-                    (
-                        v.key.clone(),
-                        v.values.iter().map(|o| o.raw.clone()).collect(),
-                    )
-                })
+                .map(|v| (v.name(), v.values.iter().map(|s| Vary::raw(s)).collect()))
                 .collect(),
             combinations: varies.iter().map(|v| v.values.len()).product(),
             shard: None,
@@ -258,28 +218,6 @@ impl GridFile {
     }
 }
 
-/// `list` split at its commas outside brackets, braces and quotes: a TOML array or table,
-/// or a quoted string with a comma, is one value.
-fn split_top_level(list: &str) -> Vec<&str> {
-    let (mut parts, mut start, mut depth, mut quote) = (Vec::new(), 0, 0i32, None);
-    for (i, c) in list.char_indices() {
-        match (quote, c) {
-            (Some(q), _) if c == q => quote = None,
-            (Some(_), _) => {}
-            (None, '"' | '\'') => quote = Some(c),
-            (None, '[' | '{') => depth += 1,
-            (None, ']' | '}') => depth -= 1,
-            (None, ',') if depth == 0 => {
-                parts.push(&list[start..i]);
-                start = i + 1;
-            }
-            _ => {}
-        }
-    }
-    parts.push(&list[start..]);
-    parts
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -314,27 +252,19 @@ mod tests {
     }
 
     #[test]
-    fn vary_parses_a_list() {
-        let v = vary("discretisation.links_per_turn=8, 16,32");
-        assert_eq!(v.key, "discretisation.links_per_turn");
-        let raws: Vec<&str> = v.values.iter().map(|o| o.raw.as_str()).collect();
-        assert_eq!(raws, ["8", "16", "32"]);
-        assert_eq!(v.values[1].value, toml::Value::Integer(16));
-        assert!("a=1,,2".parse::<Vary>().is_err());
-        assert!("a".parse::<Vary>().is_err());
-    }
-
-    #[test]
-    fn a_list_splits_only_at_its_top_level_commas() {
-        assert_eq!(split_top_level("8, 16,32"), ["8", " 16", "32"]);
+    fn keys_varied_together_take_their_values_together_in_the_product() {
+        let g = grid(&[vary("a:b=1:x,2:y"), vary("c=7,8")]);
+        let s: Vec<String> = g.iter().map(|c| settings(&c.overrides)).collect();
         assert_eq!(
-            split_top_level("[1, 2],[3,4], {a = 1, b = 2}"),
-            ["[1, 2]", "[3,4]", " {a = 1, b = 2}"]
+            s,
+            ["a=1 b=x c=7", "a=1 b=x c=8", "a=2 b=y c=7", "a=2 b=y c=8"]
         );
+        let file = GridFile::new("t", "s", &[vary("a:b=1:x,2:y")], Shard::ALL);
         assert_eq!(
-            split_top_level("\"a,b\",'c,d',e"),
-            ["\"a,b\"", "'c,d'", "e"]
+            file.vary,
+            [("a:b".to_owned(), vec!["1:x".to_owned(), "2:y".to_owned()])]
         );
+        assert_eq!(file.combinations, 2);
     }
 
     #[test]

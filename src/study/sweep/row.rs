@@ -395,16 +395,26 @@ fn max_abs(errs: impl Iterator<Item = Option<f64>>) -> Option<f64> {
         .try_fold(0.0_f64, |m, e| e.map(|e| m.max(e)))
 }
 
-/// The result cells of a finished run, in [`result_columns`] order.
-pub fn result_cells(report: &RunReport, jobs: usize) -> Vec<String> {
+/// The result cells of a finished run, in [`result_columns`] order for the sweep's
+/// milestone `labels` (a milestone the run's scene does not have is an empty cell).
+pub fn result_cells(report: &RunReport, jobs: usize, labels: &[String]) -> Vec<String> {
     let cells = |cols: &[Col]| {
         cols.iter()
             .map(|c| c.cell(report, jobs))
             .collect::<Vec<_>>()
     };
+    let milestone = |l: &String| report.milestones.iter().find(|m| m.key.to_string() == *l);
     let mut c = cells(&Col::HEAD);
-    c.extend(report.milestones.iter().map(|m| opt(m.err_vs_geo)));
-    c.extend(report.milestones.iter().map(|m| opt(m.err_vs_eq7)));
+    c.extend(
+        labels
+            .iter()
+            .map(|l| opt(milestone(l).and_then(|m| m.err_vs_geo))),
+    );
+    c.extend(
+        labels
+            .iter()
+            .map(|l| opt(milestone(l).and_then(|m| m.err_vs_eq7))),
+    );
     c.extend(cells(&Col::MID));
     c.extend(cells(&Col::BANG));
     c.push(Col::Status.cell(report, jobs));
@@ -421,7 +431,7 @@ mod tests {
         let report = crate::run::run(&scene, &mut []).unwrap();
         let labels: Vec<String> = report.milestones.iter().map(|m| m.label.clone()).collect();
         let columns = result_columns(&labels);
-        let cells = result_cells(&report, 1);
+        let cells = result_cells(&report, 1, &labels);
         assert_eq!(columns.len(), cells.len());
         let at = |c: Col| cells[columns.iter().position(|n| n == c.name()).unwrap()].clone();
         assert_eq!(at(Col::Links), report.links.to_string());

@@ -1,0 +1,146 @@
+//! What a study of the bang across tapes needs of `uncoil sweep` and `sweep-report`: keys
+//! varied together, a range of pushes, a core varied (whose milestones differ), the pushes
+//! pooled as each setting's ensemble by default, on the yoga mat at 8 links a turn.
+
+use std::path::Path;
+
+use assert_cmd::Command;
+
+use uncoil::study::sweep::SweepTable;
+
+fn uncoil() -> Command {
+    Command::cargo_bin("uncoil").unwrap()
+}
+
+/// 8 cheap runs: two frictions, a solid and a cored mat (its release radius varied with
+/// its core), two pushes.
+fn study(out: &Path) {
+    uncoil()
+        .args(["sweep", "yoga-mat", "--jobs", "1", "--quiet"])
+        .args(["--vary", "discretisation.links_per_turn=8"])
+        .args(["--vary", "floor.friction=0.3,1.0"])
+        .args([
+            "--vary",
+            "tape.core_radius_m:stop.bang_radius_m=0:0.005,0.02:0.03",
+        ])
+        .args(["--vary", "push.contact_speed_m_s=0.3..0.301/2"])
+        .arg("--out")
+        .arg(out)
+        .assert()
+        .success();
+}
+
+fn report(out: &Path, extra: &[&str]) -> String {
+    let a = uncoil()
+        .arg("sweep-report")
+        .arg(out)
+        .args(extra)
+        .assert()
+        .success();
+    String::from_utf8(a.get_output().stdout.clone()).unwrap()
+}
+
+#[test]
+fn keys_varied_together_a_push_range_and_a_core_make_one_readable_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("map");
+    study(&out);
+    // Every row has a cell under every column, though a core changes the milestones.
+    let t = SweepTable::read(&out.join("sweep.csv")).unwrap();
+    assert_eq!(t.rows.len(), 8);
+    assert!(t.rows.iter().all(|r| r.len() == t.header.len()));
+    let cell = |r: usize, c: &str| t.rows[r][t.column(c).unwrap()].clone();
+    let core = |r: usize| cell(r, "tape.core_radius_m").parse::<f64>().unwrap();
+    for r in 0..8 {
+        let (radius, fraction) = (cell(r, "err_geo_0.5R"), cell(r, "err_geo_f=0.5"));
+        if core(r) > 0.0 {
+            assert!(radius.is_empty() && !fraction.is_empty(), "row {r}");
+            assert_eq!(cell(r, "stop.bang_radius_m"), "0.03");
+        } else {
+            assert!(!radius.is_empty() && fraction.is_empty(), "row {r}");
+            assert_eq!(cell(r, "stop.bang_radius_m"), "0.005");
+        }
+    }
+    let pushes: Vec<String> = (0..2).map(|r| cell(r, "push.contact_speed_m_s")).collect();
+    assert_eq!(pushes, ["0.3", "0.301"]);
+
+    // The pushes are each setting's ensemble; the release radius goes with the core.
+    let text = report(&out, &[]);
+    assert!(
+        text.contains("Pooled as the repetitions of each setting: `push.contact_speed_m_s`"),
+        "{text}"
+    );
+    assert!(text.contains("### `floor.friction` ("), "{text}");
+    assert!(
+        text.contains("### `tape.core_radius_m`, varied together with `stop.bang_radius_m` ("),
+        "{text}"
+    );
+    assert!(!text.contains("### `stop.bang_radius_m`"), "{text}");
+    assert!(!text.contains("### `push.contact_speed_m_s`"), "{text}");
+    assert!(
+        !text.contains("stop.bang_radius_m=0.03"),
+        "grouped by a tied key: {text}"
+    );
+    let svg = std::fs::read_to_string(out.join("shares-floor.friction.svg")).unwrap();
+    for panel in [
+        "floor normal share",
+        "freezing share",
+        "still moving / kinetic in",
+    ] {
+        assert!(svg.contains(panel), "{panel}");
+    }
+    let swatches = crate::support::check_legends(&svg);
+    assert_eq!(swatches.len(), 2, "{swatches:?}");
+
+    // `none` pools nothing: the pushes are a key of their own.
+    let text = report(&out, &["--repeat-key", "none"]);
+    assert!(text.contains("### `push.contact_speed_m_s`"), "{text}");
+    assert!(!text.contains("Pooled as"), "{text}");
+    uncoil()
+        .args(["sweep-report"])
+        .arg(&out)
+        .args(["--repeat-key", "none", "--repeat-key", "floor.friction"])
+        .assert()
+        .code(2);
+}
+
+#[test]
+fn a_bad_range_or_a_setting_short_of_its_keys_exits_2_and_runs_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    for (vary, says) in [
+        ("push.contact_speed_m_s=0.3..0.31", "no /N"),
+        ("push.contact_speed_m_s=0.3..0.31/1", "N must be 2 to"),
+        ("push.contact_speed_m_s=0.3..0.3/4", "A and B must differ"),
+        (
+            "floor.friction:push.contact_speed_m_s=0.3:0.3,1.0",
+            "1 values for 2 keys",
+        ),
+        (
+            "floor.friction:push.contact_speed_m_s=0..1/3",
+            "a range A..B/N takes one key",
+        ),
+        ("floor.friction:floor.friction=1:2", "named twice"),
+    ] {
+        let out = dir.path().join("bad");
+        uncoil()
+            .args(["sweep", "yoga-mat", "--vary", vary, "--out"])
+            .arg(&out)
+            .assert()
+            .code(2)
+            .stderr(predicates::str::contains(says));
+        assert!(!out.exists(), "{vary}: ran");
+    }
+    // A key in two --vary, one of them with another key.
+    uncoil()
+        .args(["sweep", "yoga-mat"])
+        .args([
+            "--vary",
+            "floor.friction:push.contact_speed_m_s=0.3:0.3,1.0:0.3",
+        ])
+        .args(["--vary", "floor.friction=0.5"])
+        .arg("--out")
+        .arg(dir.path().join("twice"))
+        .assert()
+        .code(2)
+        .stderr(predicates::str::contains("varied twice"));
+}
