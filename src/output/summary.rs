@@ -230,12 +230,11 @@ fn ensemble_command(report: &RunReport) -> String {
     let v = report.scene.push.contact_speed_m_s;
     let decimals = (2.0 - v.log10().floor()).clamp(0.0, 12.0);
     let step = 10f64.powf(-decimals);
-    let pushes: Vec<String> = (0..8)
-        .map(|k| format!("{:.*}", decimals as usize, v + step * f64::from(k)))
-        .collect();
+    let push = |k: f64| format!("{:.*}", decimals as usize, v + step * k);
     format!(
-        "uncoil sweep {scene} --vary push.contact_speed_m_s={}",
-        pushes.join(",")
+        "uncoil sweep {scene} --vary push.contact_speed_m_s={}..{}/8",
+        push(0.0),
+        push(7.0)
     )
 }
 
