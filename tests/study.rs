@@ -144,3 +144,22 @@ fn a_bad_range_or_a_setting_short_of_its_keys_exits_2_and_runs_nothing() {
         .code(2)
         .stderr(predicates::str::contains("varied twice"));
 }
+
+/// The pushes alone, the other keys fixed: nothing else to pool them for, so they are a key
+/// of their own.
+#[test]
+fn a_sweep_of_the_pushes_alone_draws_them_as_a_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("pushes");
+    uncoil()
+        .args(["sweep", "yoga-mat", "--jobs", "1", "--quiet"])
+        .args(["--vary", "discretisation.links_per_turn=8"])
+        .args(["--vary", "push.contact_speed_m_s=0.3..0.301/2"])
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    let text = report(&out, &[]);
+    assert!(text.contains("### `push.contact_speed_m_s`"), "{text}");
+    assert!(!text.contains("Pooled as"), "{text}");
+}

@@ -362,9 +362,13 @@ pub fn report(args: &ReportArgs) -> anyhow::Result<Exit> {
 const PUSH_KEY: &str = "push.contact_speed_m_s";
 
 /// The keys pooled as repetitions: those given (`none`: no key), or by default the pushes
-/// where another key is varied beside them (a sweep of the pushes alone draws them as a
-/// key of their own).
-fn repeat_keys(given: &[String], varied: &[String]) -> anyhow::Result<Vec<String>> {
+/// where another key takes two values or more beside them (`others_vary`; a sweep of the
+/// pushes alone draws them as a key of their own).
+fn repeat_keys(
+    given: &[String],
+    varied: &[String],
+    others_vary: bool,
+) -> anyhow::Result<Vec<String>> {
     if given.iter().any(|k| k == "none") {
         if given.len() > 1 {
             anyhow::bail!(Usage(
@@ -379,7 +383,7 @@ fn repeat_keys(given: &[String], varied: &[String]) -> anyhow::Result<Vec<String
             varied.join(", ")
         )));
     }
-    if given.is_empty() && varied.len() > 1 && varied.iter().any(|k| k == PUSH_KEY) {
+    if given.is_empty() && others_vary && varied.iter().any(|k| k == PUSH_KEY) {
         return Ok(vec![PUSH_KEY.to_owned()]);
     }
     Ok(given.to_vec())
@@ -403,7 +407,11 @@ fn write_report(args: &ReportArgs, sweep: &Path) -> anyhow::Result<String> {
             .unwrap_or_else(|| "sweep".into())
     });
     let varied = table.varied_keys();
-    let repeats = repeat_keys(&args.repeat_key, &varied)?;
+    let others_vary = varied.iter().filter(|k| *k != PUSH_KEY).any(|k| {
+        let c = table.column(k).expect("a varied key is a column");
+        table.rows.iter().any(|r| r[c] != table.rows[0][c])
+    });
+    let repeats = repeat_keys(&args.repeat_key, &varied, others_vary)?;
     let mut analysis = SweepAnalysis::new(table, reference, cost, &repeats)?;
     analysis.target = args.target;
     if args.no_convergence {

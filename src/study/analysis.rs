@@ -208,7 +208,6 @@ impl SweepAnalysis {
     }
 }
 
-/// The cell of varied key `k` in row `r`.
 /// The varied keys that were varied together with an earlier one (`--vary A:B=...`): each
 /// such key mapped to that earlier key, its lead. A key is tied to a lead when each takes
 /// two values or more and each one's value fixes the other's over every row, which a
@@ -246,6 +245,7 @@ pub fn tied_keys(table: &SweepTable) -> BTreeMap<String, String> {
     tied
 }
 
+/// The cell of varied key `k` in row `r`.
 fn cell(table: &SweepTable, r: usize, k: &str) -> String {
     let c = table.column(k).expect("a varied key is a column");
     table.rows[r][c].clone()
