@@ -209,9 +209,10 @@ impl SweepAnalysis {
 }
 
 /// The varied keys that were varied together with an earlier one (`--vary A:B=...`): each
-/// such key mapped to that earlier key, its lead. A key is tied to a lead when each takes
-/// two values or more and each one's value fixes the other's over every row, which a
-/// product grid never gives and keys varied together always do.
+/// such key mapped to that earlier key, its lead. A key that takes two values or more is
+/// tied to an earlier key whose value fixes its own in every row: a product grid never
+/// gives that (each key's values meet every value of the other), keys varied together
+/// always do (the later ones may repeat a value, as a step shared by two thicknesses).
 pub fn tied_keys(table: &SweepTable) -> BTreeMap<String, String> {
     let keys = table.varied_keys();
     let column = |k: &str| -> Vec<&str> {
@@ -232,12 +233,9 @@ pub fn tied_keys(table: &SweepTable) -> BTreeMap<String, String> {
         if distinct(&f) < 2 {
             continue;
         }
-        let lead = keys[..j].iter().find(|lead| {
-            !tied.contains_key(*lead) && {
-                let l = column(lead);
-                fixes(&l, &f) && fixes(&f, &l)
-            }
-        });
+        let lead = keys[..j]
+            .iter()
+            .find(|lead| !tied.contains_key(*lead) && { fixes(&column(lead), &f) });
         if let Some(lead) = lead {
             tied.insert(follower.clone(), lead.clone());
         }
@@ -517,5 +515,57 @@ mod tests {
         let f = s.self_fit.unwrap();
         assert_eq!(f.n, 3);
         assert_relative_eq!(f.order, 2.0, epsilon = 1e-6);
+    }
+
+    /// A table of the varied keys `keys` and then `links`, one row per `rows` entry.
+    fn keyed(keys: &[&str], rows: &[&[&str]]) -> SweepTable {
+        let header = std::iter::once("index")
+            .chain(keys.iter().copied())
+            .chain(["links"])
+            .map(str::to_owned)
+            .collect();
+        let rows = rows
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                std::iter::once(i.to_string())
+                    .chain(r.iter().map(|c| (*c).to_owned()))
+                    .chain(["10".to_owned()])
+                    .collect()
+            })
+            .collect();
+        SweepTable { header, rows }
+    }
+
+    #[test]
+    fn keys_varied_together_are_tied_to_their_lead_and_a_product_grid_ties_none() {
+        // b and c varied with a (c repeats a value), d in a product with them.
+        let t = keyed(
+            &["a", "b", "c", "d"],
+            &[
+                &["1", "x", "0.1", "7"],
+                &["1", "x", "0.1", "8"],
+                &["2", "y", "0.1", "7"],
+                &["2", "y", "0.1", "8"],
+                &["3", "z", "0.2", "7"],
+                &["3", "z", "0.2", "8"],
+            ],
+        );
+        let tied = tied_keys(&t);
+        assert_eq!(tied.get("b").map(String::as_str), Some("a"));
+        assert_eq!(tied.get("c").map(String::as_str), Some("a"));
+        assert!(
+            !tied.contains_key("a") && !tied.contains_key("d"),
+            "{tied:?}"
+        );
+        // A product grid of two keys: neither fixes the other.
+        let t = keyed(
+            &["a", "d"],
+            &[&["1", "7"], &["1", "8"], &["2", "7"], &["2", "8"]],
+        );
+        assert!(tied_keys(&t).is_empty());
+        // A key that takes one value is fixed, not tied.
+        let t = keyed(&["a", "e"], &[&["1", "5"], &["2", "5"]]);
+        assert!(tied_keys(&t).is_empty());
     }
 }
