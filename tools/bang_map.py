@@ -88,8 +88,8 @@ def main() -> None:
         tape = (number(r["tape.thickness_m"]), number(r["tape.core_radius_m"]))
         points[(tape, number(r["floor.friction"]))].append(r)
     radius = 0.03
-    print("| b/R | core | friction | runs | ended | " + " | ".join(n for n, _ in SHARES) + " | run wall s |")
-    print("|---|---|---|---|---|" + "---|" * len(SHARES) + "---|")
+    print("| b/R | core | friction | runs | ended | " + " | ".join(n for n, _ in SHARES) + " | most energy gained | run wall s |")
+    print("|---|---|---|---|---|" + "---|" * len(SHARES) + "---|---|")
     fits: dict[tuple, tuple[list, list, list]] = defaultdict(lambda: ([], [], []))
     for (tape, mu), rs in sorted(points.items()):
         cells = []
