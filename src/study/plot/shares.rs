@@ -7,9 +7,11 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
+use plotters::coord::types::RangedCoordf64;
+
 use super::{
-    DESC_PX, Drawn, LEGEND_PX, Line, TICK_PX, X_LABEL_AREA_PX, Y_LABEL_AREA_PX, color, draw_line,
-    err, font, legend, range,
+    DESC_PX, Drawn, LEGEND_PX, Line, LogTicks, TICK_PX, X_LABEL_AREA_PX, X_TICK_ROOM_PX,
+    Y_LABEL_AREA_PX, color, draw_line, err, font, legend, log_range, plot_size, range,
 };
 use crate::study::analysis::{BANG_OBSERVABLES, BangStudy, NUMERICAL_MARK, Reading};
 use crate::study::sweep::Col;
@@ -115,7 +117,12 @@ fn draw_head(
     Ok(())
 }
 
+/// One point of a line: the setting's value, the mean, its standard error (0 where it has
+/// none) and the setting's place in its study.
+type Point = (f64, f64, f64, usize);
+
 /// `shares-KEY.svg` for the `studies` of one physical `key` (one per setting of the others).
+/// Values spanning a decade or more, all positive, go on a log axis.
 pub(super) fn shares_plot(
     path: &Path,
     key: &str,
@@ -128,78 +135,115 @@ pub(super) fn shares_plot(
     draw_head(&head, key, studies, title)?;
     let lines = styles(studies);
     let (x0, x1) = range(studies.iter().flat_map(|b| b.values.iter().copied()));
+    let (lo, hi) = studies
+        .iter()
+        .flat_map(|b| b.values.iter().copied())
+        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    let log = lo > 0.0 && hi >= 10.0 * lo;
     for (panel, reading) in body.split_evenly((3, 2)).iter().zip(PANELS) {
         let k = BANG_OBSERVABLES
             .iter()
             .position(|o| o.1 == reading)
             .expect("a panel's observable is observed");
-        let points = |b: &&BangStudy| {
-            (0..b.values.len())
-                .map(|i| {
-                    let s = b.se[k][i];
-                    (
-                        b.values[i],
-                        b.mean[k][i],
-                        if s.is_finite() { s } else { 0.0 },
-                        i,
-                    )
-                })
-                .filter(|p| p.0.is_finite() && p.1.is_finite())
-                .collect::<Vec<_>>()
+        let points: Vec<Vec<Point>> = studies
+            .iter()
+            .map(|b| {
+                (0..b.values.len())
+                    .map(|i| {
+                        let s = b.se[k][i];
+                        let s = if s.is_finite() { s } else { 0.0 };
+                        (b.values[i], b.mean[k][i], s, i)
+                    })
+                    .filter(|p| p.0.is_finite() && p.1.is_finite())
+                    .collect()
+            })
+            .collect();
+        let (y0, y1) = range(points.iter().flatten().flat_map(|p| [p.1 - p.2, p.1 + p.2]));
+        let builder = || {
+            let mut b = ChartBuilder::on(panel);
+            b.caption(BANG_OBSERVABLES[k].0, font(DESC_PX))
+                .margin(8)
+                .x_label_area_size(X_LABEL_AREA_PX)
+                .y_label_area_size(Y_LABEL_AREA_PX);
+            b
         };
-        let (y0, y1) = range(
-            studies
-                .iter()
-                .flat_map(points)
-                .flat_map(|(_, m, s, _)| [m - s, m + s]),
-        );
-        let mut chart = ChartBuilder::on(panel)
-            .caption(BANG_OBSERVABLES[k].0, font(DESC_PX))
-            .margin(8)
-            .x_label_area_size(X_LABEL_AREA_PX)
-            .y_label_area_size(Y_LABEL_AREA_PX)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(err)?;
-        chart
-            .configure_mesh()
-            .x_desc(key)
-            .y_labels(6)
-            .label_style(font(TICK_PX))
-            .axis_desc_style(font(DESC_PX))
-            .light_line_style(WHITE.mix(0.0))
-            .draw()
-            .map_err(err)?;
-        let mut drawn = Drawn::default();
-        for (b, (line, label)) in studies.iter().zip(&lines) {
-            let pts = points(b);
-            let c = line.color;
-            let xy: Vec<(f64, f64)> = pts.iter().map(|p| (p.0, p.1)).collect();
-            draw_line(&mut chart, &mut drawn, xy, *line, label.clone())?;
-            let ends: Vec<(f64, f64)> = pts
-                .iter()
-                .flat_map(|&(x, m, s, _)| [(x, m - s), (x, m + s)])
-                .collect();
-            drawn.book_ink(&chart, &ends);
-            chart
-                .draw_series(
-                    pts.iter().map(|&(x, m, s, _)| {
-                        ErrorBar::new_vertical(x, m - s, m, m + s, c.filled(), 6)
-                    }),
-                )
+        let first = reading == PANELS[0];
+        if log {
+            let (h0, h1) = log_range([lo, hi]);
+            let ticks = LogTicks::new((h0, h1), plot_size(panel, true).0, X_TICK_ROOM_PX);
+            let mut chart = builder()
+                .build_cartesian_2d(ticks.axis((h0, h1)), y0..y1)
                 .map_err(err)?;
             chart
-                .draw_series(
-                    pts.iter()
-                        .filter(|p| b.numerical_marked(p.3))
-                        .map(|&(x, m, _, _)| Circle::new((x, m), 8, RED.stroke_width(2))),
-                )
+                .configure_mesh()
+                .x_desc(key)
+                .y_labels(6)
+                .x_labels(ticks.values.len().max(1))
+                .x_label_formatter(&LogTicks::label)
+                .label_style(font(TICK_PX))
+                .axis_desc_style(font(DESC_PX))
+                .light_line_style(WHITE.mix(0.0))
+                .draw()
                 .map_err(err)?;
-        }
-        // One legend, in the first panel: every panel draws the same lines.
-        if reading == PANELS[0] {
-            legend(&mut chart, &drawn)?;
+            draw_series(&mut chart, studies, &lines, &points, first)?;
+        } else {
+            let mut chart = builder().build_cartesian_2d(x0..x1, y0..y1).map_err(err)?;
+            chart
+                .configure_mesh()
+                .x_desc(key)
+                .y_labels(6)
+                .label_style(font(TICK_PX))
+                .axis_desc_style(font(DESC_PX))
+                .light_line_style(WHITE.mix(0.0))
+                .draw()
+                .map_err(err)?;
+            draw_series(&mut chart, studies, &lines, &points, first)?;
         }
     }
     root.present().map_err(err)?;
+    Ok(())
+}
+
+/// Each study's line, error bars and rings on `chart`, and, on the `first` panel, the one
+/// legend: every panel draws the same lines.
+fn draw_series<'a, X>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
+    studies: &[&BangStudy],
+    lines: &[(Line, String)],
+    points: &[Vec<Point>],
+    first: bool,
+) -> anyhow::Result<()>
+where
+    X: Ranged<ValueType = f64>,
+{
+    let mut drawn = Drawn::default();
+    for ((b, (line, label)), pts) in studies.iter().zip(lines).zip(points) {
+        let c = line.color;
+        let xy: Vec<(f64, f64)> = pts.iter().map(|p| (p.0, p.1)).collect();
+        draw_line(chart, &mut drawn, xy, *line, label.clone())?;
+        let ends: Vec<(f64, f64)> = pts
+            .iter()
+            .flat_map(|&(x, m, s, _)| [(x, m - s), (x, m + s)])
+            .collect();
+        drawn.book_ink(chart, &ends);
+        chart
+            .draw_series(
+                pts.iter()
+                    .map(|&(x, m, s, _)| ErrorBar::new_vertical(x, m - s, m, m + s, c.filled(), 6)),
+            )
+            .map_err(err)?;
+        chart
+            .draw_series(
+                pts.iter()
+                    .filter(|p| b.numerical_marked(p.3))
+                    .map(|&(x, m, _, _)| Circle::new((x, m), 8, RED.stroke_width(2))),
+            )
+            .map_err(err)?;
+    }
+    if first {
+        legend(chart, &drawn)?;
+    }
     Ok(())
 }
