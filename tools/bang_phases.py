@@ -10,7 +10,8 @@ turn onto the floor, then the rest (the landings that follow and the sliding to 
 For each folder it prints one CSV row: the push, the time of that moment after the release,
 the share of the normal and of the friction work done by then, and the share of friction's
 work done in steps where the normal impulses did work too (an impact's friction, as against
-sliding under the tape's weight alone). With several folders it ends with the mean and the
+sliding under the tape's weight alone), and the share of the bang's steps that are such
+impact steps. With several folders it ends with the mean and the
 standard error of each column.
 
     tools/bang_phases.py runs/thin-*      # one folder per push
@@ -28,6 +29,7 @@ COLUMNS = [
     "normal_by_then",
     "friction_by_then",
     "friction_in_impact_steps",
+    "impact_steps",
 ]
 
 
@@ -47,17 +49,15 @@ def phases(folder: Path) -> list[float]:
     half = next(i for i, k in enumerate(kinetic) if k <= kinetic[0] / 2)
     # A step whose normal impulses did work is an impact: resting contact does none.
     tiny = 1e-9 * normal[-1]
-    in_impacts = sum(
-        friction[i] - friction[i - 1]
-        for i in range(1, len(rows))
-        if normal[i] - normal[i - 1] > tiny
-    )
+    impacts = [i for i in range(1, len(rows)) if normal[i] - normal[i - 1] > tiny]
+    in_impacts = sum(friction[i] - friction[i - 1] for i in impacts)
     return [
         report["scene"]["push"]["contact_speed_m_s"],
         t[half],
         normal[half] / normal[-1],
         friction[half] / friction[-1],
         in_impacts / friction[-1],
+        len(impacts) / (len(rows) - 1),
     ]
 
 

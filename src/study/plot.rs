@@ -350,6 +350,26 @@ where
         .map_err(err)
 }
 
+/// The house style of a chart's mesh: tick labels and axis descriptions in the plots' fonts,
+/// no light grid lines.
+trait HouseStyle {
+    /// Applies the house style.
+    fn house_style(&mut self) -> &mut Self;
+}
+
+impl<X, Y, DB> HouseStyle for plotters::chart::MeshStyle<'_, '_, X, Y, DB>
+where
+    X: Ranged,
+    Y: Ranged,
+    DB: DrawingBackend,
+{
+    fn house_style(&mut self) -> &mut Self {
+        self.label_style(font(TICK_PX))
+            .axis_desc_style(font(DESC_PX))
+            .light_line_style(WHITE.mix(0.0))
+    }
+}
+
 /// One curve of a line chart.
 struct Curve<'a> {
     label: &'a str,
@@ -381,9 +401,7 @@ fn line_chart(
         .configure_mesh()
         .x_desc(x_desc)
         .y_desc(y_desc)
-        .label_style(font(TICK_PX))
-        .axis_desc_style(font(DESC_PX))
-        .light_line_style(WHITE.mix(0.0))
+        .house_style()
         .draw()
         .map_err(err)?;
     let mut drawn = Drawn::default();
@@ -434,9 +452,7 @@ fn log_chart<'a, 'b>(
         .y_labels(y_ticks.values.len().max(1))
         .x_label_formatter(&LogTicks::label)
         .y_label_formatter(&LogTicks::label)
-        .label_style(font(TICK_PX))
-        .axis_desc_style(font(DESC_PX))
-        .light_line_style(WHITE.mix(0.0))
+        .house_style()
         .draw()
         .map_err(err)?;
     Ok(chart)

@@ -8,9 +8,9 @@ use anyhow::Context as _;
 use plotters::prelude::*;
 
 use super::{
-    Area, Curve, DESC_PX, Drawn, EQ7, EXACT, LinChart, Line, LogChart, LogTicks, MARGIN_PX, SIM,
-    TICK_PX, X_LABEL_AREA_PX, X_TICK_ROOM_PX, Y_LABEL_AREA_PX, color, draw_line, err, font, legend,
-    line_chart, log_chart, log_range, pairs, plot_size, positive_pairs, range,
+    Area, Curve, DESC_PX, Drawn, EQ7, EXACT, HouseStyle, LinChart, Line, LogChart, LogTicks,
+    MARGIN_PX, SIM, X_LABEL_AREA_PX, X_TICK_ROOM_PX, Y_LABEL_AREA_PX, color, draw_line, err, font,
+    legend, line_chart, log_chart, log_range, pairs, plot_size, positive_pairs, range,
 };
 use crate::output::folder::{REPORT, SAMPLES};
 use crate::run::RunReport;
@@ -412,9 +412,7 @@ fn bang_panel(
         .y_desc("energy (J)")
         .x_labels(ticks.values.len().max(1))
         .x_label_formatter(&LogTicks::label)
-        .label_style(font(TICK_PX))
-        .axis_desc_style(font(DESC_PX))
-        .light_line_style(WHITE.mix(0.0))
+        .house_style()
         .draw()
         .map_err(err)?;
     let mut drawn = Drawn::default();

@@ -10,7 +10,7 @@ use plotters::prelude::*;
 use plotters::coord::types::RangedCoordf64;
 
 use super::{
-    DESC_PX, Drawn, LEGEND_PX, Line, LogTicks, TICK_PX, X_LABEL_AREA_PX, X_TICK_ROOM_PX,
+    DESC_PX, Drawn, HouseStyle, LEGEND_PX, Line, LogTicks, X_LABEL_AREA_PX, X_TICK_ROOM_PX,
     Y_LABEL_AREA_PX, color, draw_line, err, font, legend, log_range, plot_size, range,
 };
 use crate::study::analysis::{BANG_OBSERVABLES, BangStudy, NUMERICAL_MARK, Reading};
@@ -182,9 +182,7 @@ pub(super) fn shares_plot(
                 .y_labels(6)
                 .x_labels(ticks.values.len().max(1))
                 .x_label_formatter(&LogTicks::label)
-                .label_style(font(TICK_PX))
-                .axis_desc_style(font(DESC_PX))
-                .light_line_style(WHITE.mix(0.0))
+                .house_style()
                 .draw()
                 .map_err(err)?;
             draw_series(&mut chart, studies, &lines, &points, first)?;
@@ -194,9 +192,7 @@ pub(super) fn shares_plot(
                 .configure_mesh()
                 .x_desc(key)
                 .y_labels(6)
-                .label_style(font(TICK_PX))
-                .axis_desc_style(font(DESC_PX))
-                .light_line_style(WHITE.mix(0.0))
+                .house_style()
                 .draw()
                 .map_err(err)?;
             draw_series(&mut chart, studies, &lines, &points, first)?;

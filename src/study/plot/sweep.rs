@@ -8,7 +8,7 @@ use anyhow::Context as _;
 use plotters::prelude::*;
 
 use super::{
-    Area, DESC_PX, Drawn, EXACT, Line, LogChart, LogTicks, SIM, TICK_PX, X_LABEL_AREA_PX,
+    Area, DESC_PX, Drawn, EXACT, HouseStyle, Line, LogChart, LogTicks, SIM, X_LABEL_AREA_PX,
     X_TICK_ROOM_PX, Y_LABEL_AREA_PX, color, draw_line, draw_markers, err, font, legend, log_chart,
     log_range, pairs, plot_size, positive_pairs, range,
 };
@@ -374,9 +374,7 @@ fn bang_study_plot(path: &Path, b: &BangStudy, title: &str) -> anyhow::Result<()
             .y_labels(6)
             .x_labels(ticks.values.len().max(1))
             .x_label_formatter(&LogTicks::label)
-            .label_style(font(TICK_PX))
-            .axis_desc_style(font(DESC_PX))
-            .light_line_style(WHITE.mix(0.0))
+            .house_style()
             .draw()
             .map_err(err)?;
         let pts = pairs(&b.h, m);
