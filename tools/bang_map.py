@@ -120,9 +120,17 @@ def main() -> None:
             f"- b/R = 1/{radius / tape[0]:.0f}, core {core}: mu 0.1-0.6: "
             f"{fit_power(*map(list, zip(*low)))}; mu 0.1-1.5: {fit_power(mu, share, se)}"
         )
-    total = sum(number(r["wall_s"]) for r in rows if math.isfinite(number(r["wall_s"])))
+    def wall(rs: list[dict]) -> float:
+        return sum(number(r["wall_s"]) for r in rs if math.isfinite(number(r["wall_s"])))
+
+    sliding = [r for r in rows if number(r["floor.friction"]) > 0]
+    frictionless = [r for r in rows if number(r["floor.friction"]) == 0]
     print()
-    print(f"{len(rows)} runs, {total:.0f} s of run wall time in all.")
+    print(
+        f"{len(rows)} runs, {wall(rows):.0f} s of run wall time in all: "
+        f"{len(sliding)} with friction, {wall(sliding):.0f} s; "
+        f"{len(frictionless)} frictionless, {wall(frictionless):.0f} s."
+    )
 
 
 if __name__ == "__main__":
