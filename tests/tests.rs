@@ -3,6 +3,7 @@
 mod bang;
 mod cli;
 mod errata;
+mod exact_chain;
 mod folded;
 mod folder;
 mod fuzz;
