@@ -40,7 +40,6 @@ mod build;
 pub mod exact_chain;
 pub mod folded;
 mod impulses;
-pub mod nodal;
 mod observe;
 mod parts;
 mod shed;
@@ -205,8 +204,6 @@ pub struct Model {
     bang: BangRecord,
     /// The bang's exact chain, once it steps the bang.
     exact: Option<bang::exact::ExactBang>,
-    /// The bang's nodal chain, once it steps the bang.
-    nodal: Option<bang::nodal::NodalBang>,
     ground: RigidBodyHandle,
     floor: ColliderHandle,
     phase: Phase,
@@ -286,7 +283,6 @@ impl Model {
             accounts: Accounts::default(),
             bang: BangRecord::default(),
             exact: None,
-            nodal: None,
             ground,
             floor,
             phase: Phase::Rolling,
@@ -318,9 +314,6 @@ impl Model {
 
     /// Kinetic and potential energy of the whole tape (J).
     pub fn energy(&self) -> (f64, f64) {
-        if let Some((kinetic, potential)) = self.nodal_energy() {
-            return (kinetic, self.chain.frozen_potential_j + potential);
-        }
         let mut kinetic = 0.0;
         let mut potential = self.chain.frozen_potential_j;
         for (_, body) in self.world.bodies.iter() {
@@ -384,9 +377,7 @@ impl Model {
         };
         let moving = self.snapshot();
         // The floor's contact impulses of the step, read once for the forces and the ledger.
-        let contacts: Vec<(RigidBodyHandle, work::FloorImpulse)> = if self.on_nodal_chain() {
-            self.step_nodal(dt)
-        } else if self.on_exact_chain() {
+        let contacts: Vec<(RigidBodyHandle, work::FloorImpulse)> = if self.on_exact_chain() {
             self.step_exact(dt)
         } else {
             self.world.step();

@@ -140,10 +140,6 @@ pub enum BangEngine {
     /// contacts (`bang_iterations` substeps, `bang_relax_iterations` relax sweeps): the
     /// cross-check.
     Rapier,
-    /// `"midpoint"`: the nodal chain (`model::nodal`): the pieces' joint points as the
-    /// unknowns, stepped by the energy-consistent midpoint rule with the floor's contacts in
-    /// the same Newton iterations; the pieces' rigidity does no work at any step.
-    Midpoint,
 }
 
 /// When the simulation ends.

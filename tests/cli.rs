@@ -340,6 +340,14 @@ const BAD_SCENES: &[(&str, Edit, &[&str])] = &[
         ),
         &["push.contact_speed_m_s = 0: must be > 0 when gravity.g_m_s2 = 0: nothing would move"],
     ),
+    (
+        "the retired midpoint chain",
+        Edit::Append("[solver]\nbang_engine = \"midpoint\""),
+        &[
+            "solver.bang_engine = \"midpoint\": the midpoint (nodal) chain was retired: use \
+             \"exact\" (the default); its results are kept in docs/history.md\n",
+        ],
+    ),
 ];
 
 /// The command `uncoil run <scene> --out <out>`.
@@ -404,7 +412,7 @@ fn bad_scenes_exit_2_with_message_and_no_output() {
 }
 
 /// Hostile overrides of a shipped scene: each is refused at once, before the run starts,
-/// naming the key and the budget it would break.
+/// naming the key and the budget it would break, or the retired engine it names.
 const HOSTILE_OVERRIDES: &[(&[&str], &[&str])] = &[
     (
         &["solver.max_dt_s=1e-308"],
@@ -432,6 +440,13 @@ const HOSTILE_OVERRIDES: &[(&[&str], &[&str])] = &[
     (
         &["stop.max_time_s=1e300"],
         &["error: stop.max_time_s = 1e300: must be > 0 and <= 10000"],
+    ),
+    (
+        &["solver.bang_engine=midpoint"],
+        &[
+            "error: solver.bang_engine = \"midpoint\": the midpoint (nodal) chain was retired: \
+             use \"exact\" (the default); its results are kept in docs/history.md\n",
+        ],
     ),
 ];
 

@@ -139,6 +139,11 @@ fn bad_input_exits_2_naming_key_value_and_rule() {
         ),
         ("pin.height_m=-2", "pin.height_m = -2: must be > 0"),
         ("chain.links=7", "chain.links = 7: must be even"),
+        (
+            "solver.joints=midpoint",
+            "error: solver.joints = \"midpoint\": the midpoint (nodal) chain was retired: use \
+             \"exact\" (the default); its results are kept in docs/history.md\n",
+        ),
     ] {
         let out = dir.path().join("run");
         Command::cargo_bin("uncoil")

@@ -10,7 +10,6 @@ mod fuzz;
 mod hard;
 mod house;
 mod mcap;
-mod nodal;
 mod paths;
 mod readme;
 mod scene_files;

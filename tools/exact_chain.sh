@@ -9,8 +9,8 @@
 #                 at its 0.3 rad a step, and with pieces of 5 b at half the step
 # Usage: tools/exact_chain.sh [folded-free|folded-table|coil [SCENE ...]|thin-converge]
 #        (default: all but thin-converge)
-# JOINTS=midpoint runs the folded chain on the nodal chain's midpoint step instead of the
-# exact chain's RATTLE; ENGINES=exact,midpoint (default rapier,exact) picks the coil's engines.
+# JOINTS=impulse or JOINTS=multibody runs the folded chain on rapier's joints instead of the
+# exact chain; ENGINES=exact or ENGINES=rapier (default rapier,exact) picks the coil's engines.
 # Runs two at a time; the engine times are per run, so they share the machine's cores.
 set -euo pipefail
 joints=${JOINTS:-exact}

@@ -5,7 +5,6 @@
 use super::*;
 
 pub(super) mod exact;
-pub(super) mod nodal;
 
 impl Model {
     /// Joins the moving links, in order along the tape, into rigid pieces at least
@@ -180,16 +179,10 @@ impl Model {
             .collect();
         // What the exact chain took when it made the joints rigid (at the release, and at a
         // freeze's new pin) is the model's discard, as joining the pieces is: not the joints'.
-        let (work, caught) = match self.nodal_step_work() {
-            Some(booked) => booked,
-            None => {
-                let exact = self.exact.as_ref().filter(|_| self.on_exact_chain());
-                let gravity_work = exact.map(|e| e.gravity_work_j);
-                let caught = exact.map_or(0.0, |e| e.caught_j);
-                let work = work::step_work(&bodies, &floor, self.world.gravity, dt, gravity_work);
-                (work, caught)
-            }
-        };
+        let exact = self.exact.as_ref().filter(|_| self.on_exact_chain());
+        let gravity_work = exact.map(|e| e.gravity_work_j);
+        let caught = exact.map_or(0.0, |e| e.caught_j);
+        let work = work::step_work(&bodies, &floor, self.world.gravity, dt, gravity_work);
         let impulse: f64 = floor.iter().map(|(_, c)| c.normal.length()).sum();
         // Potential energy above lying flat on the floor: the weight across the floor times
         // the centre of mass's height above where it would lie (never negative: on a fixed

@@ -94,38 +94,26 @@ impl BlockTridiag {
         ]
     }
 
-    /// The entry at `(r, c)` within diagonal block `i`.
-    pub(in crate::model) fn diag_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
+    /// The entry at `(r, c)` within diagonal block `i` (the tests fill a system entry by
+    /// entry; the exact chain, block by block with [`Self::blocks_mut`]).
+    #[cfg(test)]
+    fn diag_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
         let s = self.sizes[i];
         &mut self.diag[self.diag_at[i] + r * s + c]
     }
 
     /// The entry at `(r, c)` of `U_i`: row `r` of block `i`, column `c` of block `i + 1`.
-    pub(in crate::model) fn upper_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
+    #[cfg(test)]
+    fn upper_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
         let s = self.sizes[i + 1];
         &mut self.upper[self.off_at[i] + r * s + c]
     }
 
     /// The entry at `(r, c)` of `L_{i+1}`: row `r` of block `i + 1`, column `c` of block `i`.
-    pub(in crate::model) fn lower_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
+    #[cfg(test)]
+    fn lower_mut(&mut self, i: usize, r: usize, c: usize) -> &mut f64 {
         let s = self.sizes[i];
         &mut self.lower[self.off_at[i] + r * s + c]
-    }
-
-    /// The entry in row `r` of block `bi` and column `c` of block `bj`, which must be the
-    /// same block or a neighbour.
-    ///
-    /// # Panics
-    /// If the blocks are not neighbours.
-    pub(in crate::model) fn entry(&mut self, bi: usize, r: usize, bj: usize, c: usize) -> &mut f64 {
-        if bi == bj {
-            self.diag_mut(bi, r, c)
-        } else if bj == bi + 1 {
-            self.upper_mut(bi, r, c)
-        } else {
-            assert_eq!(bi, bj + 1, "block {bi} and block {bj} are not neighbours");
-            self.lower_mut(bj, r, c)
-        }
     }
 
     /// Factorises the system in place: each diagonal block becomes the inverse of its Schur

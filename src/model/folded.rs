@@ -13,7 +13,6 @@ use rapier2d_f64::prelude::*;
 
 use super::build::floor_builder;
 use super::exact_chain::{self, Body, ExactChain, Floor, Joint, Pin, SolveStats, StepError};
-use super::nodal::{NodalChain, Piece};
 use super::work::{BodyState, FloorImpulse, Moved, floor_impulses, step_work};
 use super::{BangLedger, Model};
 use crate::scene::folded::{ChainJoints, FoldedChain};
@@ -46,7 +45,6 @@ enum Engine {
         floor: Option<ColliderHandle>,
     },
     Exact(Box<ExactChain>),
-    Nodal(Box<NodalChain>),
 }
 
 /// The folded chain in the engine.
@@ -71,7 +69,6 @@ impl FoldedModel {
         let nodes = fold_nodes(scene);
         let engine = match scene.solver.joints {
             ChainJoints::Exact => Engine::Exact(Box::new(exact_fold(scene, &nodes, m, inertia))),
-            ChainJoints::Midpoint => Engine::Nodal(Box::new(nodal_fold(scene, &nodes, m))),
             _ => rapier_fold(scene, &nodes, m, inertia),
         };
         let mut model = Self {
@@ -109,7 +106,6 @@ impl FoldedModel {
         let g = self.g;
         // Each contact beside the index of its link along the chain.
         let mut gravity_work = None;
-        let mut nodal_work = None;
         let contacts: Vec<(usize, FloorImpulse)> = match &mut self.engine {
             Engine::Rapier { world, floor, .. } => {
                 world.step();
@@ -128,20 +124,6 @@ impl FoldedModel {
                 gravity_work = Some(report.gravity_work_j);
                 chain.contacts().iter().map(exact_chain_impulse).collect()
             }
-            Engine::Nodal(chain) => {
-                let report = chain.step(dt, [0.0, -g])?;
-                report.add_to(&mut self.solve);
-                nodal_work = Some(report);
-                chain
-                    .contacts()
-                    .iter()
-                    .map(|c| {
-                        let impulse =
-                            FloorImpulse::of_chain(c.normal_n_s, c.friction_n_s, c.arm_m, c.work_j);
-                        (c.piece, impulse)
-                    })
-                    .collect()
-            }
         };
         let after = self.links();
         let (_, m, _) = self.link;
@@ -154,16 +136,7 @@ impl FoldedModel {
                 after: body_state(b),
             })
             .collect();
-        // The nodal chain books its own step: the floor's work as it measured it, the
-        // rigidity's exact work.
-        let work = match nodal_work {
-            Some(r) => super::work::StepWork {
-                normal_j: r.floor_work_j[0],
-                friction_j: r.floor_work_j[1],
-                joints_j: r.joint_work_j,
-            },
-            None => step_work(&moved, &contacts, Vector::new(0.0, -g), dt, gravity_work),
-        };
+        let work = step_work(&moved, &contacts, Vector::new(0.0, -g), dt, gravity_work);
         // The chain's momentum balance: the pin's impulse is what gravity and the floor
         // leave of the momentum's change.
         let dp: f64 = moved
@@ -194,7 +167,6 @@ impl FoldedModel {
         let (_, m, inertia) = self.link;
         match &self.engine {
             Engine::Exact(chain) => chain.bodies().to_vec(),
-            Engine::Nodal(chain) => (0..chain.pieces().len()).map(|i| chain.body(i)).collect(),
             Engine::Rapier { world, links, .. } => links
                 .iter()
                 .map(|&h| {
@@ -222,10 +194,7 @@ impl FoldedModel {
     /// The state at time `t` of `links`, with the pin's impulse `pin` so far and no ledger.
     fn observe(&self, links: &[Body], t: f64, pin: f64) -> ChainState {
         let (l, _, _) = self.link;
-        let kinetic_j = match &self.engine {
-            Engine::Nodal(chain) => chain.kinetic_j(),
-            _ => links.iter().map(Body::kinetic_j).sum(),
-        };
+        let kinetic_j = links.iter().map(Body::kinetic_j).sum();
         let last = links.last().expect("at least four links");
         let arm = last.arm([0.5 * l, 0.0]);
         let tip = last.point([0.5 * l, 0.0]);
@@ -258,7 +227,6 @@ impl FoldedModel {
                 .map(|&h| world.bodies[h].kinetic_energy())
                 .sum(),
             Engine::Exact(chain) => chain.kinetic_j(),
-            Engine::Nodal(chain) => chain.kinetic_j(),
         }
     }
 }
@@ -319,37 +287,6 @@ fn exact_fold(scene: &FoldedChain, nodes: &[Vector], m: f64, inertia: f64) -> Ex
             friction: scene.floor.friction,
         };
         chain.set_floor(floor, &vec![vec![[0.5 * l, 0.0]]; n]);
-    }
-    chain
-}
-
-/// The chain in its fold on the nodal chain: its nodes the fold's, pinned at the first; on
-/// the floor, each link touching it at its far node.
-fn nodal_fold(scene: &FoldedChain, nodes: &[Vector], m: f64) -> NodalChain {
-    let l = scene.chain.link_m();
-    let n = nodes.len() - 1;
-    let rod = Piece {
-        mass_kg: m,
-        centre: [0.5, 0.0],
-        gyration: 1.0 / 3.0,
-        length_m: l,
-        chord_angle_rad: 0.0,
-    };
-    let at: Vec<[f64; 2]> = nodes.iter().map(|p| [p.x, p.y]).collect();
-    let mut chain = NodalChain::new(
-        at,
-        vec![[0.0; 2]; n + 1],
-        vec![rod; n],
-        true,
-        exact_chain::tolerance_for(l),
-    );
-    if scene.floor.enabled {
-        let floor = Floor {
-            point_m: [0.0, 0.0],
-            normal: [0.0, 1.0],
-            friction: scene.floor.friction,
-        };
-        chain.set_floor(floor, &vec![vec![[1.0, 0.0]]; n]);
     }
     chain
 }

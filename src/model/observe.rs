@@ -22,9 +22,6 @@ impl Model {
         if let (true, Some(exact)) = (self.on_exact_chain(), &self.exact) {
             return exact.penetration_m;
         }
-        if let Some(depth) = self.nodal_penetration() {
-            return depth;
-        }
         let mut deepest: f64 = 0.0;
         for pair in self.world.narrow_phase.contact_pairs_with(self.floor) {
             if let PairContacts::Rigid(contacts) = &pair.contacts {
@@ -173,11 +170,7 @@ impl Model {
             lowest_m: 0.0,
             max_spin_rad_s: 0.0,
             finite: true,
-            unsolved: self
-                .exact
-                .as_ref()
-                .and_then(|e| e.failed)
-                .or(self.nodal_failure()),
+            unsolved: self.exact.as_ref().and_then(|e| e.failed),
         };
         for (_, body) in self.world.bodies.iter() {
             if !body.is_dynamic() {

@@ -176,7 +176,7 @@ impl Model {
         let mut node = self.world.bodies[piece.body]
             .position()
             .transform_point(near);
-        if self.phase != Phase::Rolling && self.settings.bang_engine != BangEngine::Midpoint {
+        if self.phase != Phase::Rolling {
             // Just above the contact plane: on or below it, the floor pushes the pinned node
             // out while the pin holds it, and the solver's two impulses grow against each
             // other without bound.
@@ -264,14 +264,8 @@ impl Model {
                 .piece_nodes(oldest)
                 .map(|n| pose.transform_point(n))
                 .collect();
-            let mut kinetic = body.kinetic_energy();
+            let kinetic = body.kinetic_energy();
             self.chain.frozen_potential_j += self.potential_of(body);
-            // On the nodal chain: the energy the chain lost with the piece (its share, and
-            // the pin's catch of the next node); the chain pins that node where it is.
-            let nodal = self.nodal_freeze_first(oldest.body);
-            if let Some(lost) = nodal {
-                kinetic = lost;
-            }
             // The last entry was the previous frozen piece's far node: this one's near node.
             self.chain.frozen_nodes.pop();
             self.chain
@@ -290,9 +284,7 @@ impl Model {
                 _ => {
                     self.accounts.ledger.bang_j += kinetic;
                     self.bang.ledger.freeze_j += kinetic;
-                    if nodal.is_none() {
-                        self.close_pin_gap();
-                    }
+                    self.close_pin_gap();
                 }
             }
         }

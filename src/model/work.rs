@@ -98,7 +98,7 @@ pub(super) struct FloorImpulse {
 }
 
 impl FloorImpulse {
-    /// A chain's (exact or nodal) impulse at a contact point: normal and friction (N s), the
+    /// The exact chain's impulse at a contact point: normal and friction (N s), the
     /// arm from the piece's centre of mass (m), and their work as the chain realised it (J).
     pub(super) fn of_chain(
         normal: [f64; 2],

@@ -104,14 +104,9 @@ pub fn chain_summary(scene: &FoldedChain, r: &ChainReport) -> String {
         "no floor".to_owned()
     };
     let solver = match s.joints {
-        ChainJoints::Exact | ChainJoints::Midpoint => format!(
-            "the {} chain, a {} s step: {:.2} iterations a step on average, at most {}, {} \
+        ChainJoints::Exact => format!(
+            "the exact chain, a {} s step: {:.2} iterations a step on average, at most {}, {} \
              step(s) missed the tolerance; widest joint gap {:.1e} m, deepest contact {:.1e} m",
-            if s.joints == ChainJoints::Exact {
-                "exact"
-            } else {
-                "midpoint (nodal)"
-            },
             s.dt_s,
             r.solve.mean_iterations(),
             r.solve.max_iterations,

@@ -12,7 +12,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::scene::budget::MAX_ENGINE_STEPS;
-use crate::scene::rules::{Shown, check, check_int, invalid, name};
+use crate::scene::rules::{MIDPOINT_RETIRED, Shown, check, check_int, invalid, name};
 use crate::scene::{Gravity, SceneError};
 
 /// The value of the top-level key `kind` that selects this scene kind.
@@ -145,10 +145,6 @@ pub enum ChainJoints {
     /// one solve a step (`solver.substeps`, `relax_iterations`, `joint_hz` and `contact_hz`
     /// are the engine's and do not apply).
     Exact,
-    /// `"midpoint"`: the nodal chain (`model::nodal`), the links' joint points as the
-    /// unknowns, stepped by the energy-consistent midpoint rule with the floor's contacts in
-    /// the same iterations; the links' rigidity does no work at any step.
-    Midpoint,
 }
 
 /// `[stop]`.
@@ -369,12 +365,14 @@ impl FoldedChain {
                 "impulse" => ChainJoints::Impulse,
                 "multibody" => ChainJoints::Multibody,
                 "exact" => ChainJoints::Exact,
-                "midpoint" => ChainJoints::Midpoint,
+                "midpoint" => {
+                    return Err(invalid("solver.joints", "\"midpoint\"", MIDPOINT_RETIRED));
+                }
                 other => {
                     return Err(invalid(
                         "solver.joints",
                         format!("{other:?}"),
-                        "must be \"impulse\", \"multibody\", \"exact\" or \"midpoint\"",
+                        "must be \"impulse\", \"multibody\" or \"exact\"",
                     ));
                 }
             },

@@ -16,6 +16,11 @@ pub(super) fn invalid(key: &str, value: impl Display, rule: impl Into<String>) -
     }
 }
 
+/// The rule a scene breaks where it names `"midpoint"` (`solver.bang_engine`, or a folded
+/// chain's `solver.joints`): the nodal chain's midpoint step it named no longer exists.
+pub(super) const MIDPOINT_RETIRED: &str = "the midpoint (nodal) chain was retired: use \"exact\" \
+     (the default); its results are kept in docs/history.md";
+
 /// The schema error of scene `name` from the TOML parser, its types said in words
 /// ([`plain_types`]).
 pub(crate) fn parse_error(name: &str, error: &impl Display) -> SceneError {

@@ -11,7 +11,7 @@ use crate::scene::budget::{self, MAX_LINKS};
 use crate::scene::file::{
     DiscretisationFile, FloorFile, OutputFile, PushFile, SceneFile, SolverFile, StopFile, TapeFile,
 };
-use crate::scene::rules::{check, check_int, invalid, name};
+use crate::scene::rules::{MIDPOINT_RETIRED, check, check_int, invalid, name};
 use crate::scene::{
     Axis, BangEngine, Discretisation, Floor, Gravity, Output, Push, Scene, SceneError, Solver,
     Stop, Tape,
@@ -267,12 +267,18 @@ fn solver(s: &SolverFile, tape: &Tape) -> Result<Solver, SceneError> {
         bang_engine: match s.bang_engine.as_str() {
             "exact" => BangEngine::Exact,
             "rapier" => BangEngine::Rapier,
-            "midpoint" => BangEngine::Midpoint,
+            "midpoint" => {
+                return Err(invalid(
+                    "solver.bang_engine",
+                    "\"midpoint\"",
+                    MIDPOINT_RETIRED,
+                ));
+            }
             other => {
                 return Err(invalid(
                     "solver.bang_engine",
                     format!("{other:?}"),
-                    "must be \"exact\", \"midpoint\" or \"rapier\"",
+                    "must be \"exact\" or \"rapier\"",
                 ));
             }
         },

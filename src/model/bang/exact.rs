@@ -109,9 +109,6 @@ impl Model {
     /// the kick turns it about a contact point rather than pressing it into the floor, the
     /// end-of-step impulses leave it there, and the piece, at rest, would read a few mm/s.
     pub(in crate::model) fn moved_speed(&self, piece: Piece) -> f64 {
-        if let Some(speed) = self.nodal_moved_speed(piece) {
-            return speed;
-        }
         let body = &self.world.bodies[piece.body];
         let realised = self
             .exact
@@ -229,7 +226,7 @@ impl Model {
 }
 
 impl Model {
-    /// The moving pieces `handles` as the bang's chains (exact or nodal) take them: each
+    /// The moving pieces `handles` as the bang's exact chain takes them: each
     /// body's centre of mass in its own frame, and its state about it.
     pub(super) fn chain_bodies(&self, handles: &[RigidBodyHandle]) -> (Vec<Vector>, Vec<Body>) {
         let centres: Vec<Vector> = handles
@@ -249,7 +246,7 @@ impl Model {
         (centres, bodies)
     }
 
-    /// The bang's chains' tolerance: the exact chain's for its shortest moving piece, a
+    /// The bang's exact chain's tolerance: the chain's for its shortest moving piece, a
     /// body turning at most twice the step rule's turn in a step (room for an impact's
     /// spin-up).
     pub(super) fn chain_tolerance(&self) -> Tolerance {
@@ -270,7 +267,7 @@ impl Model {
         }
     }
 
-    /// The floor as the bang's chains see it.
+    /// The floor as the bang's exact chain sees it.
     pub(super) fn chain_floor(&self) -> Floor {
         Floor {
             point_m: [0.0, self.world.colliders[self.floor].translation().y],

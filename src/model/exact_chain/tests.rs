@@ -3,7 +3,8 @@
 //! pendulum's energy error is of second order in the step; the joints stay closed; joined
 //! bodies moving as one lose nothing when their joint is made rigid; a rod landing flat on
 //! one end leaves the other at 3V/2; on the floor a chain carries its weight, and slides to
-//! rest under Coulomb's friction.
+//! rest under Coulomb's friction. Where a check was the nodal chain's (retired: its results
+//! are in docs/history.md), its bound came with it and says so.
 
 use super::*;
 

@@ -26,7 +26,6 @@ use crate::model::Model;
 use crate::scene::Scene;
 
 mod exact;
-mod nodal;
 
 /// The substep counts the ledger must be right at: the shipped 24 and above.
 const CHECKED_SUBSTEPS: [usize; 3] = [24, 48, 96];
