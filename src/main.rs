@@ -73,7 +73,8 @@ enum Command {
         #[arg(long, value_name = "X", requires = "live", value_parser = parse_pace)]
         pace: Option<f64>,
     },
-    /// Read a run's MCAP log back: channels, message counts, time range, metadata, ledger.
+    /// Read a run's MCAP log back: channels, message counts, time range, metadata, ledger;
+    /// then the final bang's drawings: how many, and in how many the tape crosses itself.
     Inspect {
         /// The MCAP file, e.g. runs/yoga-mat/run.mcap.
         file: PathBuf,
@@ -235,8 +236,12 @@ fn plot(dir: &Path) -> anyhow::Result<Exit> {
 /// `uncoil inspect FILE`.
 fn inspect(file: &Path) -> anyhow::Result<Exit> {
     paths::mcap_file(file)?;
-    let inv = uncoil::output::inspect::read_inventory(file)?;
+    let (inv, bang) = uncoil::output::inspect::read_with_bang(file)?;
     print!("{}", uncoil::output::inspect::describe(file, &inv));
+    if let Some(bang) = bang {
+        println!();
+        print!("{}", uncoil::output::inspect::bang::describe(&bang));
+    }
     Ok(Exit::Ok)
 }
 

@@ -430,6 +430,74 @@ fn inspect_prints_channels_counts_time_range_metadata_and_ledger() {
 }
 
 #[test]
+fn inspect_counts_the_bang_s_drawings_and_where_the_tape_crosses_itself() {
+    let logged = logged();
+    let path = logged.dir.join("run.mcap");
+    let bytes = std::fs::read(&path).unwrap();
+    let release = logged.report.ledger.bang_time_s.unwrap();
+    // Every drawing after the release, as a plain reader of the file counts them.
+    let mut after = 0;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        after += usize::from(m.channel.topic == "/scene" && m.log_time > ns(release));
+    }
+    let inv = uncoil::output::inspect::inventory(&bytes).unwrap();
+    let bang = uncoil::output::inspect::bang::bang_drawings(&bytes, &inv)
+        .unwrap()
+        .expect("the yoga mat has a bang");
+    assert_eq!(bang.drawn, after);
+    assert!(bang.crossing <= bang.drawn && (bang.crossing > 0) == (bang.most.0 > 0));
+    assert_eq!(bang.thickness_m, logged.scene.tape.thickness_m);
+    Command::cargo_bin("uncoil")
+        .unwrap()
+        .arg("inspect")
+        .arg(&path)
+        .assert()
+        .success()
+        .stdout(predicate::str::contains(format!(
+            "The final bang's drawings (/scene after the release at t = {release:.6} s):\n  \
+             drawn: {after} ("
+        )))
+        .stdout(predicate::str::contains(format!(
+            "the tape's drawn midline crosses itself in {} of them, at most {} times in one",
+            bang.crossing, bang.most.0
+        )))
+        .stdout(predicate::str::contains("closest approach"));
+}
+
+#[test]
+fn the_drawn_tape_reads_back_from_its_outer_end() {
+    use uncoil::output::view::drawings::tape_drawings;
+    let logged = logged();
+    let bytes = std::fs::read(logged.dir.join("run.mcap")).unwrap();
+    let (drawings, cut) = tape_drawings(&bytes, None).unwrap();
+    assert!(cut.is_none());
+    let b = logged.scene.tape.thickness_m;
+    // At t = 0 the whole tape is wound: its outer end touches the floor at the origin, its
+    // midline half a thickness up.
+    let first = &drawings[0];
+    assert_eq!(first.t_s, 0.0);
+    assert_eq!(first.thickness_m, b);
+    let outer = first.midline_m[0];
+    assert!(
+        outer[0].abs() < 1e-6 && (outer[1] - 0.5 * b).abs() < 0.05 * b,
+        "{outer:?}"
+    );
+    // At the end the whole tape is laid, from its outer end near the origin to its inner
+    // end where the bang left it.
+    let last = drawings.last().unwrap();
+    assert!((last.t_s - logged.report.sim_time_s).abs() < 1e-9);
+    let start = last.midline_m[0];
+    assert!(
+        start[0].abs() < b && (start[1] - 0.5 * b).abs() < 0.05 * b,
+        "{start:?}"
+    );
+    let end = last.midline_m.last().unwrap();
+    let x_end = logged.report.bang.as_ref().unwrap().end_x_m;
+    assert!((end[0] - x_end).abs() < 1e-5, "{end:?} against {x_end}");
+}
+
+#[test]
 fn inspect_reads_a_cut_off_file_as_far_as_its_data_goes() {
     // A file cut in half, as a crash leaves it: no summary, but the chunks before the cut.
     let bytes = std::fs::read(logged().dir.join("run.mcap")).unwrap();
