@@ -117,6 +117,36 @@ fn ns(t_s: f64) -> u64 {
     (t_s * 1e9).round() as u64
 }
 
+/// The bang's drawings (log times, ns) against its pace: the first at its first step, at
+/// least 200 in all and 10 in its first millisecond, the last at the run's end; after its
+/// first `BANG_DRAWN_STEPS` steps, none before it is due: each one either grew the time
+/// since the release by the factor `bang_frame_growth` since the drawing before, or is a
+/// drawing of the scene rate, or the last.
+fn check_bang_pace(bang: &[u64], release: f64, rate: f64, t_end: f64) {
+    let since: Vec<f64> = bang.iter().map(|&t| t as f64 * 1e-9 - release).collect();
+    let first_ms = since.iter().filter(|&&s| s <= 1e-3).count();
+    assert!(
+        since.len() >= 200 && first_ms >= 10,
+        "{} drawings of the bang, {first_ms} in its first millisecond",
+        since.len()
+    );
+    assert!(since[0] > 0.0 && since[0] < 1e-4, "first at {} s", since[0]);
+    assert_eq!(*bang.last().unwrap(), ns(t_end), "the last step is drawn");
+    let growth = uncoil::run::bang_frame_growth();
+    // Stamps are whole nanoseconds.
+    let ns_slack = 2e-9;
+    for k in uncoil::run::BANG_DRAWN_STEPS as usize + 1..since.len() - 1 {
+        let grew = since[k] + ns_slack >= growth * since[k - 1];
+        let tick = |s: f64| ((release + s) * rate + 1e-9).floor();
+        assert!(
+            grew || tick(since[k]) > tick(since[k - 1]),
+            "drawing {k} of the bang at {:.3e} s after the release, {:.3e} s after the one before",
+            since[k],
+            since[k] - since[k - 1]
+        );
+    }
+}
+
 #[test]
 fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
     let logged = logged();
@@ -173,16 +203,21 @@ fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
     let total: usize = r.messages.values().map(Vec::len).sum();
     assert_eq!(stats.message_count, total as u64);
     let t_end = logged.report.sim_time_s;
-    let frames_f = (t_end * logged.scene.output.scene_rate_hz).floor();
-    let frames = frames_f as usize;
+    let rate = logged.scene.output.scene_rate_hz;
     let scene_n = r.messages["/scene"].len();
+    // Up to the release, one drawing at t = 0 and one per 1 / rate.
+    let release = logged.report.ledger.bang_time_s.unwrap();
+    let times: Vec<u64> = r.messages["/scene"].iter().map(|(t, _)| *t).collect();
+    let before = times.iter().filter(|&&t| t <= ns(release)).count();
+    let frames = (release * rate).floor() as usize;
     assert!(
-        (frames + 1..=frames + 2).contains(&scene_n),
-        "/scene: {scene_n} messages over {t_end:.4} s at {} Hz, expected {} or {}",
-        logged.scene.output.scene_rate_hz,
+        (frames + 1..=frames + 2).contains(&before),
+        "/scene: {before} messages up to the release at {release:.4} s at {rate} Hz, expected {} \
+         or {}",
         frames + 1,
         frames + 2
     );
+    check_bang_pace(&times[before..], release, rate, t_end);
     assert_eq!(stats.message_start_time, 0, "the first drawing is at t = 0");
     // One transform of the frame `contact` with each drawing, following the contact line.
     assert_eq!(r.messages["/tf"].len(), scene_n);
