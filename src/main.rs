@@ -84,7 +84,8 @@ enum Command {
     /// Report on a sweep: Pareto and convergence plots (SVG) and report.md (also on stdout).
     SweepReport(cli::sweep::ReportArgs),
     /// Draw a run's motion.svg, energy.svg, approach.svg and forces.svg into its folder,
-    /// from its samples.csv and report.json.
+    /// from its samples.csv and report.json, and bang.svg, the tape's shape through the
+    /// final bang, from its run.mcap (skipped, saying why, without one).
     Plot {
         /// A run's output folder, e.g. runs/yoga-mat.
         dir: PathBuf,
@@ -227,8 +228,12 @@ fn run_any(
 /// `uncoil plot DIR`.
 fn plot(dir: &Path) -> anyhow::Result<Exit> {
     paths::run_folder(dir)?;
-    for f in uncoil::study::plot::plot_run(dir)? {
+    let plots = uncoil::study::plot::plot_run(dir)?;
+    for f in &plots.written {
         println!("wrote {}", f.display());
+    }
+    for (f, why) in &plots.skipped {
+        eprintln!("skipped {}: {why}", f.display());
     }
     Ok(Exit::Ok)
 }

@@ -1,5 +1,6 @@
 //! Where a polyline crosses itself, and how close it comes to itself: the tape's drawn
-//! midline in the final bang, read back from `run.mcap` by [`crate::output::inspect`].
+//! midline in the final bang, read back from `run.mcap` by [`crate::output::inspect`] and
+//! by `uncoil plot`'s `bang.svg`.
 //! Pure `f64` plane geometry; it knows nothing of tapes or files.
 //!
 //! Segment `i` joins points `i` and `i + 1`. Two segments cross when they are not
@@ -113,6 +114,21 @@ pub fn crossing_pairs(points: &[[f64; 2]]) -> Vec<(usize, usize)> {
     pairs
 }
 
+/// Where the segments of `points` cross (see the module's rule): each crossing's point, in
+/// the order of [`crossing_pairs`].
+pub fn crossing_points(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    crossing_pairs(points)
+        .into_iter()
+        .map(|(i, j)| {
+            let (p, q) = (points[i], points[j]);
+            let (r, s) = (sub(points[i + 1], p), sub(points[j + 1], q));
+            // p + u r = q + v s; a proper intersection has r x s != 0.
+            let u = cross(sub(q, p), s) / cross(r, s);
+            [p[0] + u * r[0], p[1] + u * r[1]]
+        })
+        .collect()
+}
+
 /// How `points` meets itself: the pairs of segments that cross, and the least distance
 /// between two segments at least `apart_m` apart along the line, where it is below
 /// `near_m`.
@@ -186,6 +202,11 @@ mod tests {
         );
         assert_eq!(self_contact(&eight, 0.1, 0.5).crossings, 1);
         assert_eq!(self_contact(&eight, 0.1, 0.5).closest_m, Some(0.0));
+        // It crosses at the origin, to the chords' sag.
+        let [at] = crossing_points(&eight)[..] else {
+            panic!("one crossing");
+        };
+        assert!(at[0].abs() < 1e-3 && at[1].abs() < 1e-3, "{at:?}");
     }
 
     #[test]

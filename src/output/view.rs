@@ -2,7 +2,7 @@
 //! `live` feature, served over the Foxglove WebSocket protocol while the run goes. Both go
 //! through the Foxglove SDK (crate `foxglove`): each run logs into its own SDK context, and
 //! the file and the server are sinks of it. It does no physics; [`drawings`] reads the
-//! tape back from `/scene` (for [`crate::output::inspect`]).
+//! tape back from `/scene` (for [`crate::output::inspect`] and `uncoil plot`'s `bang.svg`).
 //!
 //! Channels, all protobuf-encoded:
 //! - `/scene`: `foxglove.SceneUpdate`, the SDK's own type and schema. Entities in frame
