@@ -73,7 +73,8 @@ enum Command {
         #[arg(long, value_name = "X", requires = "live", value_parser = parse_pace)]
         pace: Option<f64>,
     },
-    /// Read a run's MCAP log back: channels, message counts, time range, metadata, ledger.
+    /// Read a run's MCAP log back: channels, message counts, time range, metadata, ledger;
+    /// then the final bang's drawings: how many, and in how many the tape crosses itself.
     Inspect {
         /// The MCAP file, e.g. runs/yoga-mat/run.mcap.
         file: PathBuf,
@@ -83,7 +84,8 @@ enum Command {
     /// Report on a sweep: Pareto and convergence plots (SVG) and report.md (also on stdout).
     SweepReport(cli::sweep::ReportArgs),
     /// Draw a run's motion.svg, energy.svg, approach.svg and forces.svg into its folder,
-    /// from its samples.csv and report.json.
+    /// from its samples.csv and report.json, and bang.svg, the tape's shape through the
+    /// final bang, from its run.mcap (skipped, saying why, without one).
     Plot {
         /// A run's output folder, e.g. runs/yoga-mat.
         dir: PathBuf,
@@ -226,8 +228,12 @@ fn run_any(
 /// `uncoil plot DIR`.
 fn plot(dir: &Path) -> anyhow::Result<Exit> {
     paths::run_folder(dir)?;
-    for f in uncoil::study::plot::plot_run(dir)? {
+    let plots = uncoil::study::plot::plot_run(dir)?;
+    for f in &plots.written {
         println!("wrote {}", f.display());
+    }
+    for (f, why) in &plots.skipped {
+        eprintln!("skipped {}: {why}", f.display());
     }
     Ok(Exit::Ok)
 }
@@ -235,8 +241,12 @@ fn plot(dir: &Path) -> anyhow::Result<Exit> {
 /// `uncoil inspect FILE`.
 fn inspect(file: &Path) -> anyhow::Result<Exit> {
     paths::mcap_file(file)?;
-    let inv = uncoil::output::inspect::read_inventory(file)?;
+    let (inv, bang) = uncoil::output::inspect::read_with_bang(file)?;
     print!("{}", uncoil::output::inspect::describe(file, &inv));
+    if let Some(bang) = bang {
+        println!();
+        print!("{}", uncoil::output::inspect::bang::describe(&bang));
+    }
     Ok(Exit::Ok)
 }
 

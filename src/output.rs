@@ -6,6 +6,7 @@
 
 pub mod background;
 pub mod compare;
+pub mod crossing;
 pub mod fields;
 pub mod files;
 pub mod folded;

@@ -22,6 +22,7 @@ pub use milestones::{SPOOL_FRACTIONS, milestone_radii};
 pub use report::{
     Approach, BANG_SPLIT_MIN_OF_SCALE, BangReport, Ledger, Milestone, RivalTimes, RunReport,
 };
+pub use runner::{BANG_DRAWN_STEPS, BANG_FRAMES_PER_DECADE, bang_frame_growth};
 pub use sample::{Sample, SampleInputs};
 
 use crate::run::frame::{Event, Frame};
@@ -41,8 +42,9 @@ pub trait Observer {
     fn wants_frames(&self) -> bool {
         false
     }
-    /// Called `output.scene_rate_hz` times per simulated second with the geometry, and
-    /// at the first and last step, if [`Observer::wants_frames`] (default: ignored).
+    /// Called `output.scene_rate_hz` times per simulated second with the geometry, at the
+    /// first and last step, and in the final bang at its own pace ([`BANG_DRAWN_STEPS`]), if
+    /// [`Observer::wants_frames`] (default: ignored).
     fn observe_frame(&mut self, _frame: &Frame) -> anyhow::Result<()> {
         Ok(())
     }

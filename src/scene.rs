@@ -255,7 +255,8 @@ pub struct Output {
     /// Time between rows of `samples.csv`, s; 0 samples every step (default: 0.001).
     pub sample_interval_s: f64,
     /// Drawings of the scene (links and ghost coils) per simulated second, Hz; 0 draws
-    /// none (default: 100.0). Samples are not affected.
+    /// none (default: 100.0), the final bang's own drawings included. Samples are not
+    /// affected.
     pub scene_rate_hz: f64,
 }
 

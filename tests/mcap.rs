@@ -117,6 +117,36 @@ fn ns(t_s: f64) -> u64 {
     (t_s * 1e9).round() as u64
 }
 
+/// The bang's drawings (log times, ns) against its pace: the first at its first step, at
+/// least 200 in all and 10 in its first millisecond, the last at the run's end; after its
+/// first `BANG_DRAWN_STEPS` steps, none before it is due: each one either grew the time
+/// since the release by the factor `bang_frame_growth` since the drawing before, or is a
+/// drawing of the scene rate, or the last.
+fn check_bang_pace(bang: &[u64], release: f64, rate: f64, t_end: f64) {
+    let since: Vec<f64> = bang.iter().map(|&t| t as f64 * 1e-9 - release).collect();
+    let first_ms = since.iter().filter(|&&s| s <= 1e-3).count();
+    assert!(
+        since.len() >= 200 && first_ms >= 10,
+        "{} drawings of the bang, {first_ms} in its first millisecond",
+        since.len()
+    );
+    assert!(since[0] > 0.0 && since[0] < 1e-4, "first at {} s", since[0]);
+    assert_eq!(*bang.last().unwrap(), ns(t_end), "the last step is drawn");
+    let growth = uncoil::run::bang_frame_growth();
+    // Stamps are whole nanoseconds.
+    let ns_slack = 2e-9;
+    for k in uncoil::run::BANG_DRAWN_STEPS as usize + 1..since.len() - 1 {
+        let grew = since[k] + ns_slack >= growth * since[k - 1];
+        let tick = |s: f64| ((release + s) * rate + 1e-9).floor();
+        assert!(
+            grew || tick(since[k]) > tick(since[k - 1]),
+            "drawing {k} of the bang at {:.3e} s after the release, {:.3e} s after the one before",
+            since[k],
+            since[k] - since[k - 1]
+        );
+    }
+}
+
 #[test]
 fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
     let logged = logged();
@@ -173,16 +203,21 @@ fn yoga_mat_log_reads_back_with_its_channels_counts_order_and_metadata() {
     let total: usize = r.messages.values().map(Vec::len).sum();
     assert_eq!(stats.message_count, total as u64);
     let t_end = logged.report.sim_time_s;
-    let frames_f = (t_end * logged.scene.output.scene_rate_hz).floor();
-    let frames = frames_f as usize;
+    let rate = logged.scene.output.scene_rate_hz;
     let scene_n = r.messages["/scene"].len();
+    // Up to the release, one drawing at t = 0 and one per 1 / rate.
+    let release = logged.report.ledger.bang_time_s.unwrap();
+    let times: Vec<u64> = r.messages["/scene"].iter().map(|(t, _)| *t).collect();
+    let before = times.iter().filter(|&&t| t <= ns(release)).count();
+    let frames = (release * rate).floor() as usize;
     assert!(
-        (frames + 1..=frames + 2).contains(&scene_n),
-        "/scene: {scene_n} messages over {t_end:.4} s at {} Hz, expected {} or {}",
-        logged.scene.output.scene_rate_hz,
+        (frames + 1..=frames + 2).contains(&before),
+        "/scene: {before} messages up to the release at {release:.4} s at {rate} Hz, expected {} \
+         or {}",
         frames + 1,
         frames + 2
     );
+    check_bang_pace(&times[before..], release, rate, t_end);
     assert_eq!(stats.message_start_time, 0, "the first drawing is at t = 0");
     // One transform of the frame `contact` with each drawing, following the contact line.
     assert_eq!(r.messages["/tf"].len(), scene_n);
@@ -427,6 +462,74 @@ fn inspect_prints_channels_counts_time_range_metadata_and_ledger() {
         .stdout(predicate::str::contains(
             "time order: every channel in order",
         ));
+}
+
+#[test]
+fn inspect_counts_the_bang_s_drawings_and_where_the_tape_crosses_itself() {
+    let logged = logged();
+    let path = logged.dir.join("run.mcap");
+    let bytes = std::fs::read(&path).unwrap();
+    let release = logged.report.ledger.bang_time_s.unwrap();
+    // Every drawing after the release, as a plain reader of the file counts them.
+    let mut after = 0;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        after += usize::from(m.channel.topic == "/scene" && m.log_time > ns(release));
+    }
+    let inv = uncoil::output::inspect::inventory(&bytes).unwrap();
+    let bang = uncoil::output::inspect::bang::bang_drawings(&bytes, &inv)
+        .unwrap()
+        .expect("the yoga mat has a bang");
+    assert_eq!(bang.drawn, after);
+    assert!(bang.crossing <= bang.drawn && (bang.crossing > 0) == (bang.most.0 > 0));
+    assert_eq!(bang.thickness_m, logged.scene.tape.thickness_m);
+    Command::cargo_bin("uncoil")
+        .unwrap()
+        .arg("inspect")
+        .arg(&path)
+        .assert()
+        .success()
+        .stdout(predicate::str::contains(format!(
+            "The final bang's drawings (/scene after the release at t = {release:.6} s):\n  \
+             drawn: {after} ("
+        )))
+        .stdout(predicate::str::contains(format!(
+            "the tape's drawn midline crosses itself in {} of them, at most {} times in one",
+            bang.crossing, bang.most.0
+        )))
+        .stdout(predicate::str::contains("closest approach"));
+}
+
+#[test]
+fn the_drawn_tape_reads_back_from_its_outer_end() {
+    use uncoil::output::view::drawings::tape_drawings;
+    let logged = logged();
+    let bytes = std::fs::read(logged.dir.join("run.mcap")).unwrap();
+    let (drawings, cut) = tape_drawings(&bytes, None).unwrap();
+    assert!(cut.is_none());
+    let b = logged.scene.tape.thickness_m;
+    // At t = 0 the whole tape is wound: its outer end touches the floor at the origin, its
+    // midline half a thickness up.
+    let first = &drawings[0];
+    assert_eq!(first.t_s, 0.0);
+    assert_eq!(first.thickness_m, b);
+    let outer = first.midline_m[0];
+    assert!(
+        outer[0].abs() < 1e-6 && (outer[1] - 0.5 * b).abs() < 0.05 * b,
+        "{outer:?}"
+    );
+    // At the end the whole tape is laid, from its outer end near the origin to its inner
+    // end where the bang left it.
+    let last = drawings.last().unwrap();
+    assert!((last.t_s - logged.report.sim_time_s).abs() < 1e-9);
+    let start = last.midline_m[0];
+    assert!(
+        start[0].abs() < b && (start[1] - 0.5 * b).abs() < 0.05 * b,
+        "{start:?}"
+    );
+    let end = last.midline_m.last().unwrap();
+    let x_end = logged.report.bang.as_ref().unwrap().end_x_m;
+    assert!((end[0] - x_end).abs() < 1e-5, "{end:?} against {x_end}");
 }
 
 #[test]

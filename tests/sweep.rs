@@ -356,7 +356,20 @@ fn run_with_set_then_plot() {
         .assert()
         .success()
         .stdout(predicate::str::contains("motion.svg"))
-        .stdout(predicate::str::contains("energy.svg"));
+        .stdout(predicate::str::contains("energy.svg"))
+        .stdout(predicate::str::contains("bang.svg"));
+    // The bang's filmstrip: one panel per time, each captioned with its time and crossings.
+    let bang = std::fs::read_to_string(out.join("bang.svg")).unwrap();
+    let panels = bang.matches(" after the release, ").count();
+    assert_eq!(
+        panels,
+        uncoil::study::plot::BANG_PANELS,
+        "bang.svg's panels"
+    );
+    assert!(
+        bang.contains("b = 5 mm"),
+        "bang.svg states the tape's thickness"
+    );
     let energy = std::fs::read_to_string(out.join("energy.svg")).unwrap();
     assert!(energy.starts_with("<svg"), "not an SVG");
     assert!(energy.contains("MgR"), "the energy plot names MgR");
@@ -397,6 +410,33 @@ fn run_with_set_then_plot() {
         .stderr(predicate::str::contains(
             "discretisation.links_per_turn = 5000: must be >= 3 and <= 4096",
         ));
+}
+
+#[test]
+fn plot_without_a_log_skips_the_bang_s_filmstrip_and_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    uncoil()
+        .arg("run")
+        .arg(yoga())
+        .args(["--set", "discretisation.links_per_turn=12", "--no-mcap"])
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    uncoil()
+        .arg("plot")
+        .arg(&out)
+        .assert()
+        .success()
+        .stdout(predicate::str::contains("forces.svg"))
+        .stdout(predicate::str::contains("bang.svg").not())
+        .stderr(predicate::str::contains("skipped"))
+        .stderr(predicate::str::contains("bang.svg"))
+        .stderr(predicate::str::contains(
+            "has no run.mcap (a run with --no-mcap)",
+        ));
+    assert!(out.join("forces.svg").exists() && !out.join("bang.svg").exists());
 }
 
 /// One run at a time, each one's references built while the run before it steps, gives the

@@ -32,8 +32,16 @@ pub const LOG: &str = "run.mcap";
 /// The Foxglove layout, written beside the log (or for a live view) so that the hint a run
 /// prints names a file that exists wherever it runs.
 pub const LAYOUT: &str = "foxglove-layout.json";
+/// The tape's shape through the final bang, which `uncoil plot` draws from a run's log.
+pub const BANG_SVG: &str = "bang.svg";
 /// The pictures `uncoil plot` draws from a run's files.
-pub const PLOTS: [&str; 4] = ["motion.svg", "energy.svg", "approach.svg", "forces.svg"];
+pub const PLOTS: [&str; 5] = [
+    "motion.svg",
+    "energy.svg",
+    "approach.svg",
+    "forces.svg",
+    BANG_SVG,
+];
 /// The lock file.
 const LOCK: &str = ".uncoil.lock";
 

@@ -1,7 +1,10 @@
 //! `uncoil inspect run.mcap`: reads a run's MCAP log back with the `mcap` crate and tells
-//! its channels, message counts, time range, metadata and energy ledger. It reads an
-//! unfinished file (`run.mcap.partial` after a crash) as far as its data goes. It writes
-//! nothing.
+//! its channels, message counts, time range, metadata and energy ledger, and of the final
+//! bang's drawings how many there are and where the tape crosses itself in them
+//! ([`bang`]). It reads an unfinished file (`run.mcap.partial` after a crash) as far as its
+//! data goes. It writes nothing.
+
+pub mod bang;
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -52,6 +55,15 @@ pub struct Inventory {
 pub fn read_inventory(path: &Path) -> anyhow::Result<Inventory> {
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
     inventory(&bytes)
+}
+
+/// Reads a file, takes its inventory and counts its final bang's drawings (`None` where
+/// its ledger names no release).
+pub fn read_with_bang(path: &Path) -> anyhow::Result<(Inventory, Option<bang::BangDrawings>)> {
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let inv = inventory(&bytes)?;
+    let bang = bang::bang_drawings(&bytes, &inv)?;
+    Ok((inv, bang))
 }
 
 /// Takes the inventory of an MCAP file in memory.

@@ -1,8 +1,8 @@
 //! What Foxglove shows of a run: the same channels written to `run.mcap` and, with the
 //! `live` feature, served over the Foxglove WebSocket protocol while the run goes. Both go
 //! through the Foxglove SDK (crate `foxglove`): each run logs into its own SDK context, and
-//! the file and the server are sinks of it. It does no physics and reads nothing back (see
-//! [`crate::output::inspect`]).
+//! the file and the server are sinks of it. It does no physics; [`drawings`] reads the
+//! tape back from `/scene` (for [`crate::output::inspect`] and `uncoil plot`'s `bang.svg`).
 //!
 //! Channels, all protobuf-encoded:
 //! - `/scene`: `foxglove.SceneUpdate`, the SDK's own type and schema. Entities in frame
@@ -42,6 +42,7 @@ use file::McapFile;
 use paint::Painter;
 
 pub mod channels;
+pub mod drawings;
 pub mod file;
 #[cfg(feature = "live")]
 pub mod live;

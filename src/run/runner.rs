@@ -24,6 +24,28 @@ use crate::theory::References;
 /// the last one's (and at most one `output.sample_interval_s` later).
 const BANG_SAMPLE_GROWTH: f64 = 1.1;
 
+/// The final bang is drawn at its own pace, by its steps (a step is drawn at its end:
+/// frames are never interpolated). Its first [`BANG_DRAWN_STEPS`] steps are each drawn:
+/// the bang's steps are shortest where its impacts are, at its start. After them a step is
+/// drawn once the time since the release has grown by the factor [`bang_frame_growth`] since
+/// the bang's last drawing, [`BANG_FRAMES_PER_DECADE`] a decade, or when a frame of
+/// `output.scene_rate_hz` is due (those are all still drawn), and at the run's last step. At
+/// the scene rate alone the bang's impacts, over in its first millisecond, would go undrawn.
+/// (The samples' pace in the bang, `BANG_SAMPLE_GROWTH`, is separate.)
+pub const BANG_DRAWN_STEPS: u32 = 200;
+
+/// After the bang's first [`BANG_DRAWN_STEPS`] steps, its drawings a decade of the time since
+/// the release: log pacing, so that its settling, a tenth of a second, is drawn as finely
+/// in proportion as its start. Where the bang's steps grow the time since the release by more
+/// than the factor [`bang_frame_growth`], every step is drawn.
+pub const BANG_FRAMES_PER_DECADE: f64 = 100.0;
+
+/// The factor by which the time since the release grows from one drawing of the bang to the
+/// next after its first [`BANG_DRAWN_STEPS`] steps, `10^(1 / BANG_FRAMES_PER_DECADE)` (2.3 %).
+pub fn bang_frame_growth() -> f64 {
+    10f64.powf(BANG_FRAMES_PER_DECADE.recip())
+}
+
 /// Points per turn of the exact-geometry ghost spiral.
 const GHOST_POINTS_PER_TURN: u32 = 32;
 
@@ -56,6 +78,8 @@ pub(crate) struct Runner<'s> {
     max_pen: f64,
     frame_interval: f64,
     next_frame: f64,
+    /// The bang's drawings so far, and the time since the release of its last one (s).
+    bang_frames: (u32, f64),
     /// The exact model's spiral for its ghost, once frames are drawn.
     ghost_grid: Option<SpiralGrid>,
 }
@@ -117,6 +141,7 @@ impl<'s> Runner<'s> {
             ghost_grid,
             frame_interval,
             next_frame: frame_interval,
+            bang_frames: (0, 0.0),
         };
         if frame_interval.is_finite() {
             let frame = runner.frame(0.0, 0.0);
@@ -272,15 +297,33 @@ impl<'s> Runner<'s> {
                 self.next_sample = self.next_sample.min(t_bang + since * BANG_SAMPLE_GROWTH);
             }
         }
-        if obs.t_s >= self.next_frame || (last_step && self.frame_interval.is_finite()) {
+        let in_bang = self.bang_frame_due(obs.t_s);
+        if obs.t_s >= self.next_frame || (last_step && self.frame_interval.is_finite()) || in_bang {
             let frame = self.frame(obs.t_s, obs.x_m);
             for o in observers.iter_mut() {
                 o.observe_frame(&frame)?;
             }
+            // Behind by less than one interval (a frame of the bang's drawn early): the next
+            // ordinary frame stays due when it was.
             let behind = ((obs.t_s - self.next_frame) / self.frame_interval + 1.0).floor();
-            self.next_frame += self.frame_interval * behind;
+            self.next_frame += self.frame_interval * behind.max(0.0);
+            if let Some((t_bang, _)) = self.bang {
+                self.bang_frames = (self.bang_frames.0 + 1, obs.t_s - t_bang);
+            }
         }
         Ok(())
+    }
+
+    /// Whether a step at `t_s` is a frame of the bang's own (see [`BANG_DRAWN_STEPS`]): frames
+    /// are drawn, the bang has begun, and this is one of its first steps or the time since the
+    /// release has grown by [`bang_frame_growth`] since its last drawing.
+    fn bang_frame_due(&self, t_s: f64) -> bool {
+        let Some((t_bang, _)) = self.bang else {
+            return false;
+        };
+        let (drawn, last) = self.bang_frames;
+        self.frame_interval.is_finite()
+            && (drawn < BANG_DRAWN_STEPS || t_s - t_bang >= last * bang_frame_growth())
     }
 
     /// Hands a sample to the observers: what it is made from to those that make their own,

@@ -48,7 +48,8 @@ pub const MAX_SAMPLES: f64 = 1.0e7;
 /// every link's node, two `f64` (16 bytes) before compression, so 1e11 are 1.6 TB.
 /// Largest used: 7.2e8 (`scenes/hard/thin-1000.toml`, 300 s at 100 Hz of 2.4e4 links);
 /// the budget lets the largest tape ([`MAX_LINKS`]) be drawn at the default 100 Hz for
-/// about 1000 s.
+/// about 1000 s. The final bang's own drawings (its first 200 steps, then 100 a decade of
+/// its time since the release: a few thousand at most) are not counted.
 pub const MAX_FRAME_NODES: f64 = 1.0e11;
 
 /// Whole turns of the tape's midline between the core and the outer turn, `(R - core - b) /

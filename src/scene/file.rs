@@ -84,7 +84,8 @@ const DEFAULT_REST_FRACTION: f64 = 0.001;
 /// Default `output.sample_interval_s`.
 const DEFAULT_SAMPLE_INTERVAL_S: f64 = 0.001;
 /// Default `output.scene_rate_hz`: 100 drawings per simulated second, enough to watch the
-/// final bang (0.05 s) over a few frames.
+/// unroll; the final bang, over in a tenth of a second, is drawn at its own pace besides
+/// (the run's `BANG_DRAWN_STEPS`).
 const DEFAULT_SCENE_RATE_HZ: f64 = 100.0;
 
 #[derive(Debug, Deserialize)]

@@ -8,6 +8,7 @@
 //! chart, the log-log chart, and the legend, placed where it hides least of what is drawn:
 //! `legend_spot`); a run's pictures are in `run`, a sweep's in `sweep`.
 
+mod bang;
 mod run;
 mod shares;
 mod sweep;
@@ -22,7 +23,8 @@ use plotters::prelude::*;
 
 use self::ticks::{LogAxis, LogTicks};
 
-pub use self::run::plot_run;
+pub use self::bang::{BANG_PANELS, BANG_SVG, BangPicture};
+pub use self::run::{RunPlots, plot_run};
 pub use self::sweep::plot_sweep;
 
 type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;

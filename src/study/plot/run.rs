@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 use plotters::prelude::*;
 
+use super::bang::{BANG_SVG, BangPicture, bang_plot};
 use super::{
     Area, Curve, DESC_PX, Drawn, EQ7, EXACT, HouseStyle, LinChart, Line, LogChart, LogTicks,
     MARGIN_PX, SIM, X_LABEL_AREA_PX, X_TICK_ROOM_PX, Y_LABEL_AREA_PX, color, draw_line, err, font,
@@ -40,8 +41,9 @@ fn against_references<'a>(t: &[f64], columns: &[Vec<f64>; 3]) -> [Curve<'a>; 3] 
 /// mechanism) and `dir/approach.svg` (x' against r, log-log, over the unroll, with the
 /// references, eq. (7)'s x' ~ 1/r, and where the references stop applying) and
 /// `dir/forces.svg` (`N_tot`, and `F_tot` with its split into `F` and `F_int`, against the
-/// laid fraction up to 0.95, with the exact-geometry model's). Returns the files written.
-pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+/// laid fraction up to 0.95, with the exact-geometry model's), and `dir/bang.svg` from
+/// `dir/run.mcap` (the tape's shape through the bang, or why not: [`BangPicture`]).
+pub fn plot_run(dir: &Path) -> anyhow::Result<RunPlots> {
     let run = WrittenRun::read(dir)?;
     let motion = dir.join("motion.svg");
     motion_plot(&motion, &run)?;
@@ -51,7 +53,22 @@ pub fn plot_run(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     approach_plot(&approach, &run)?;
     let forces = dir.join("forces.svg");
     forces_plot(&forces, &|c| run.cut(c), &run.name)?;
-    Ok(vec![motion, energy, approach, forces])
+    let mut written = vec![motion, energy, approach, forces];
+    let mut skipped = Vec::new();
+    match bang_plot(dir, run.bang_t, &run.name)? {
+        BangPicture::Drawn(path) => written.push(path),
+        BangPicture::Skipped(why) => skipped.push((dir.join(BANG_SVG), why)),
+    }
+    Ok(RunPlots { written, skipped })
+}
+
+/// What [`plot_run`] did: the files written, and each picture skipped with why.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RunPlots {
+    /// The files written.
+    pub written: Vec<PathBuf>,
+    /// The pictures not drawn, each with its reason.
+    pub skipped: Vec<(PathBuf, String)>,
 }
 
 /// A run's files read back: its samples, its report and what the pictures take from it.
