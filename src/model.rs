@@ -82,6 +82,9 @@ pub struct BangRecord {
     pub end: Option<BangEnd>,
     /// How the exact chain solved the bang's steps (all zero on the engine's).
     pub solve: exact_chain::SolveStats,
+    /// The ratio the handover scaled every speed by for the pieces' thickness, keeping the
+    /// energy the unroll brought (see `Model::join_pieces`); 0 before the release.
+    pub thickness_speed_ratio: f64,
 }
 
 use work::BodyState;
@@ -153,6 +156,9 @@ pub struct Observation {
     pub max_joint_gap_m: f64,
     /// Deepest penetration of a collider into the floor (m).
     pub max_penetration_m: f64,
+    /// Deepest two layers of the tape overlap (pieces not joined to each other, or a piece
+    /// and the laid tape) at the end of the last step (m); 0 but in the bang.
+    pub max_overlap_m: f64,
     /// The last step's length (s).
     pub dt_s: f64,
     /// Angular momentum of the moving part (the coil and the link hanging from it) about
@@ -262,6 +268,7 @@ impl Model {
                 bang_iterations: scene.solver.bang_iterations as usize,
                 bang_relax_iterations: scene.solver.bang_relax_iterations as usize,
                 bang_engine: scene.solver.bang_engine,
+                self_friction: tape.self_friction,
                 bang_cap_s: scene.stop.bang_cap_s,
                 rest_fraction: scene.stop.rest_fraction,
                 total_mass: tape.mass_kg,

@@ -74,6 +74,11 @@ pub struct Tape {
     pub mass_kg: f64,
     /// Inner radius of the winding (a hollow, massless core), m (default: 0.0).
     pub core_radius_m: f64,
+    /// Coulomb's coefficient between the tape's own layers in the final bang, where they
+    /// strike and rub each other, dimensionless (default: `floor.friction`: one coefficient
+    /// for the tape's face wherever it meets, so that a scene that sets only the floor's sets
+    /// both, and a frictionless scene stays frictionless).
+    pub self_friction: f64,
 }
 
 /// Time-stepping and rapier solver settings.

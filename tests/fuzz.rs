@@ -33,6 +33,8 @@ fn valid_value(key: &str) -> Option<String> {
     let default = match key {
         "floor.slope_deg" => "0.0",
         "floor.sticky" | "axis.fixed" => "false",
+        // Left to its default (the floor's coefficient) by the shipped scenes.
+        "tape.self_friction" => "1.0",
         // Kept so older files load; the shipped scenes no longer set it.
         "contact.model" => "\"spiral\"",
         _ => return None,

@@ -152,6 +152,35 @@ impl Floor {
     }
 }
 
+/// A tape's midline in one body (its nodes in the body's axes, from its centre of mass) or
+/// in the world (the laid tape's), each node with its place along the tape.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Outline {
+    /// The nodes, in order along the tape (m); consecutive nodes bound a link.
+    pub nodes: Vec<[f64; 2]>,
+    /// Each node's arc length along the tape from its outer end (m), increasing.
+    pub arc_m: Vec<f64>,
+}
+
+/// The tape's thickness: each body is every point within `radius_m` of its midline (a chain
+/// of capsules, one a link), the laid tape a still chain of the same, and the floor meets a
+/// body at its face. Bodies' layers meet each other, and the laid tape, as the floor meets
+/// them: inelastic, with Coulomb friction (`solve/layers.rs`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Layers {
+    /// Half the tape's thickness (m, >= 0).
+    pub radius_m: f64,
+    /// Coulomb's coefficient between layers (>= 0).
+    pub friction: f64,
+    /// Two points of the tape closer than this along it never meet (m): they are on the
+    /// same layer, however tightly it is bent.
+    pub exclusion_m: f64,
+    /// Each body's midline, body by body.
+    pub outlines: Vec<Outline>,
+    /// The laid tape that no longer moves, in the world's axes; empty if none.
+    pub laid: Outline,
+}
+
 /// How closely a step is solved.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Tolerance {
@@ -162,102 +191,6 @@ pub struct Tolerance {
     pub max_iterations: u32,
     /// The largest angle a body may turn in a step's drift before the step is halved (rad).
     pub max_turn_rad: f64,
-}
-
-/// The floor's impulse on one body during a step, where it acted.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ContactImpulse {
-    /// The body's index along the chain.
-    pub body: usize,
-    /// The vertex's index among the body's contact points.
-    pub vertex: usize,
-    /// Along the floor's normal (N s).
-    pub normal_n_s: [f64; 2],
-    /// Along its surface: friction (N s).
-    pub friction_n_s: [f64; 2],
-    /// From the body's centre of mass to the contact point, at the step's start (m).
-    pub arm_m: [f64; 2],
-    /// The work of the normal and the friction impulse, each times the mean velocity of the
-    /// point it acted on over the impulses at the step's start (J; negative: taken from the
-    /// chain).
-    pub work_j: [f64; 2],
-}
-
-/// How a step was solved.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct StepReport {
-    /// Newton iterations taken (each one direct solve).
-    pub iterations: u32,
-    /// Whether the drift closed the joints and the contacts' solve met its tolerance.
-    pub converged: bool,
-    /// Whether the drift closed the joints within the iteration cap.
-    pub drift_closed: bool,
-    /// The widest joint gap left at the step's end (m).
-    pub joint_gap_m: f64,
-    /// The deepest a contact point ended below the floor (m; 0 if none).
-    pub penetration_m: f64,
-    /// Gravity's work over the step, each half kick's impulse times the mean velocity over
-    /// it (J).
-    pub gravity_work_j: f64,
-    /// The largest angle a body turned in the drift (rad).
-    pub max_turn_rad: f64,
-    /// The pieces the step was taken in: 1, or more where it was halved.
-    pub pieces: u32,
-    /// The joints' work in each stage: the impulses at the start, the drift, the impulses at
-    /// the end (J; positive: given to the chain). Where the numerical part is made.
-    pub joint_work_j: [f64; 3],
-    /// What the joints took at the start of the chain's first step, when they were made
-    /// rigid: the relative motion its starting velocities had at the joints and the pin (J;
-    /// 0 after the first step). It is part of the joints' work in `joint_work_j[0]`.
-    pub caught_j: f64,
-}
-
-/// How a run's steps were solved, summed step by step.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct SolveStats {
-    /// Steps solved.
-    pub steps: u64,
-    /// Newton iterations over all steps (each one direct solve).
-    pub iterations: u64,
-    /// The most iterations one step took.
-    pub max_iterations: u32,
-    /// Steps that reached the iteration cap before the tolerance.
-    pub missed_steps: u64,
-    /// Extra pieces steps were halved into (0 if none was).
-    #[serde(default)]
-    pub halvings: u64,
-    /// The joints' work in each stage over the steps (see [`StepReport::joint_work_j`]), J.
-    #[serde(default)]
-    pub joint_work_j: [f64; 3],
-    /// The widest joint gap any step left (m).
-    pub max_joint_gap_m: f64,
-    /// The deepest any contact point ended below the floor (m).
-    pub max_penetration_m: f64,
-}
-
-impl SolveStats {
-    /// Adds one step's report.
-    pub fn add(&mut self, r: &StepReport) {
-        self.steps += 1;
-        self.iterations += u64::from(r.iterations);
-        self.max_iterations = self.max_iterations.max(r.iterations);
-        self.missed_steps += u64::from(!r.converged);
-        self.halvings += u64::from(r.pieces.saturating_sub(1));
-        for k in 0..3 {
-            self.joint_work_j[k] += r.joint_work_j[k];
-        }
-        self.max_joint_gap_m = self.max_joint_gap_m.max(r.joint_gap_m);
-        self.max_penetration_m = self.max_penetration_m.max(r.penetration_m);
-    }
-
-    /// Iterations per step, on average.
-    pub fn mean_iterations(&self) -> f64 {
-        if self.steps == 0 {
-            0.0
-        } else {
-            self.iterations as f64 / self.steps as f64
-        }
-    }
 }
 
 /// The largest turn of a body in one step's drift before the step is halved (rad): twice
@@ -277,25 +210,10 @@ pub fn tolerance_for(length_m: f64) -> Tolerance {
     }
 }
 
-/// Why a step could not be taken. The chain is left as it was before the step.
-#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-pub enum StepError {
-    /// The constraints' system was singular at block `block` (the body of that index).
-    #[error("the exact chain's system is singular at body {block}")]
-    Singular {
-        /// The block whose pivot vanished.
-        block: usize,
-    },
-    /// The solve gave a non-finite impulse or velocity.
-    #[error("the exact chain's solve gave a non-finite value")]
-    NonFinite,
-    /// A step did not converge, even halved ten times: its Newton iterations, or the
-    /// floor's contacts' modes, never settled.
-    #[error("the exact chain's step did not converge, even halved ten times")]
-    Unconverged,
-}
-
+mod report;
 mod solve;
+
+pub use report::{ContactImpulse, SolveStats, StepError, StepReport, Surface};
 
 /// The chain, its joints, its pin and its floor.
 #[derive(Debug)]
@@ -308,10 +226,15 @@ pub struct ExactChain {
     /// Where body `i`'s points start in `vertices` (one more entry than bodies).
     vertex_at: Vec<usize>,
     floor: Option<Floor>,
+    /// The tape's thickness and its layers' contacts, if set.
+    layers: Option<Layers>,
+    laid_index: solve::LaidIndex,
     tolerance: Tolerance,
     /// Each vertex's normal and friction impulse in the last stage: the next one's first
     /// guess.
     warm: Vec<[f64; 2]>,
+    /// The same for the layers' contacts, by their keys, in order.
+    layer_warm: Vec<(solve::Key, [f64; 2])>,
     contacts: Vec<ContactImpulse>,
     /// No step taken yet: the pin, if any, is new (see `solve/rows.rs`).
     fresh: bool,
@@ -344,8 +267,11 @@ impl ExactChain {
             vertices: Vec::new(),
             vertex_at,
             floor: None,
+            layers: None,
+            laid_index: solve::LaidIndex::default(),
             tolerance,
             warm: Vec::new(),
+            layer_warm: Vec::new(),
             contacts: Vec::new(),
             fresh: true,
             scratch: solve::Scratch::default(),
@@ -369,6 +295,38 @@ impl ExactChain {
         }
         self.vertex_at.push(self.vertices.len());
         self.warm = vec![[0.0; 2]; self.vertices.len()];
+    }
+
+    /// Gives the tape its thickness ([`Layers`]): from the next step on, the floor meets each
+    /// body at its face, `layers.radius_m` below its midline, and the bodies' layers meet
+    /// each other and the laid tape.
+    ///
+    /// # Panics
+    /// If `layers` does not have one outline per body, or an outline's arcs are not one per
+    /// node.
+    pub fn set_layers(&mut self, layers: Layers) {
+        assert_eq!(
+            layers.outlines.len(),
+            self.bodies.len(),
+            "outlines per body"
+        );
+        for o in layers.outlines.iter().chain([&layers.laid]) {
+            assert_eq!(o.nodes.len(), o.arc_m.len(), "one arc per node");
+        }
+        self.laid_index = solve::LaidIndex::new(&layers);
+        self.layers = Some(layers);
+        self.layer_warm.clear();
+    }
+
+    /// The tape's thickness and its layers, if set.
+    pub fn layers(&self) -> Option<&Layers> {
+        self.layers.as_ref()
+    }
+
+    /// Half the tape's thickness: how far below a body's midline the floor meets it (m; 0
+    /// without [`Layers`]).
+    fn radius_m(&self) -> f64 {
+        self.layers.as_ref().map_or(0.0, |l| l.radius_m)
     }
 
     /// The bodies.
@@ -456,6 +414,7 @@ impl ExactChain {
     ) -> Result<StepReport, StepError> {
         const MAX_DEPTH: u32 = 10;
         let (bodies, warm) = (self.bodies.clone(), self.warm.clone());
+        let layer_warm = self.layer_warm.clone();
         let result = solve::step(self, h, gravity, depth < MAX_DEPTH);
         // A contact solve that missed its tolerance is counted, not halved: a shorter step
         // does not make a stiff contact set converge. But a step that leaves a joint open
@@ -473,6 +432,7 @@ impl ExactChain {
         }
         self.bodies = bodies;
         self.warm = warm;
+        self.layer_warm = layer_warm;
         let first = self.step_within(0.5 * h, gravity, depth + 1)?;
         let contacts = std::mem::take(&mut self.contacts);
         let second = self.step_within(0.5 * h, gravity, depth + 1)?;
@@ -485,6 +445,7 @@ impl ExactChain {
             drift_closed: first.drift_closed && second.drift_closed,
             joint_gap_m: first.joint_gap_m.max(second.joint_gap_m),
             penetration_m: first.penetration_m.max(second.penetration_m),
+            overlap_m: first.overlap_m.max(second.overlap_m),
             gravity_work_j: first.gravity_work_j + second.gravity_work_j,
             max_turn_rad: first.max_turn_rad.max(second.max_turn_rad),
             pieces: first.pieces + second.pieces,

@@ -136,7 +136,13 @@ impl FoldedModel {
                 after: body_state(b),
             })
             .collect();
-        let work = step_work(&moved, &contacts, Vector::new(0.0, -g), dt, gravity_work);
+        let work = step_work(
+            &moved,
+            &contacts,
+            Vector::new(0.0, -g),
+            dt,
+            (gravity_work, 0.0),
+        );
         // The chain's momentum balance: the pin's impulse is what gravity and the floor
         // leave of the momentum's change.
         let dp: f64 = moved

@@ -80,6 +80,11 @@ impl Model {
             active_bodies: self.world.bodies.len() - 1,
             max_joint_gap_m: self.max_joint_gap(),
             max_penetration_m: self.max_penetration(),
+            max_overlap_m: self
+                .exact
+                .as_ref()
+                .filter(|_| self.on_exact_chain())
+                .map_or(0.0, |e| e.overlap_m),
             dt_s: self.last_dt,
             angular_momentum_o: self.accounts.moved_angular_momentum,
             impulses: self.accounts.impulses,

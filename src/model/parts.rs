@@ -40,6 +40,8 @@ pub(super) struct Settings {
     pub(super) bang_relax_iterations: usize,
     /// What solves the bang.
     pub(super) bang_engine: crate::scene::BangEngine,
+    /// Coulomb's coefficient between the tape's layers in the bang.
+    pub(super) self_friction: f64,
     pub(super) bang_cap_s: f64,
     pub(super) rest_fraction: f64,
     pub(super) total_mass: f64,
@@ -110,6 +112,9 @@ pub(super) struct Chain {
     /// Near node of each frozen link, from the outer end, and the far node of the last one
     /// (world frame, m): frozen links have no body left to ask.
     pub(super) frozen_nodes: Vec<[f64; 2]>,
+    /// Each node's arc length along the tape from its outer end: link `k`'s near node at
+    /// `arc_m[k]`, its far node at `arc_m[k + 1]` (m).
+    pub(super) arc_m: Vec<f64>,
 }
 
 impl Chain {
@@ -124,12 +129,19 @@ impl Chain {
                 ]
             })
             .collect();
+        let arc_m = std::iter::once(0.0)
+            .chain(links.iter().scan(0.0, |s, l| {
+                *s += l.length_m;
+                Some(*s)
+            }))
+            .collect();
         Self {
             links,
             local,
             free: VecDeque::new(),
             frozen_potential_j: 0.0,
             frozen_nodes: Vec::new(),
+            arc_m,
         }
     }
 

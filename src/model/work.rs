@@ -35,6 +35,13 @@ pub struct BangLedger {
     pub floor_normal_j: f64,
     /// Work done against the floor's friction impulses: sliding.
     pub floor_friction_j: f64,
+    /// Work done against the normal impulses between the tape's own layers (a piece on
+    /// another, or on the laid tape): their inelastic impacts.
+    #[serde(default)]
+    pub layers_normal_j: f64,
+    /// Work done against the friction between the tape's own layers: rubbing.
+    #[serde(default)]
+    pub layers_friction_j: f64,
     /// Work done against the joint impulses; zero for ideal rigid joints, so numerical.
     pub joints_j: f64,
     /// Kinetic energy the model discarded: the relative motion of the links joined into the
@@ -49,6 +56,8 @@ impl BangLedger {
     pub fn total_j(&self) -> f64 {
         self.floor_normal_j
             + self.floor_friction_j
+            + self.layers_normal_j
+            + self.layers_friction_j
             + self.joints_j
             + self.freeze_j
             + self.residual_j
@@ -208,13 +217,14 @@ pub(super) struct StepWork {
 /// The work of one step on `bodies`; `floor` are the floor's impulses of the step, by index
 /// into `bodies`; `gravity_work_j` gravity's work if the solver measured it (the exact
 /// chain's half kicks), else gravity's impulse times each body's mean velocity over the
-/// step.
+/// step; `layers_j` the work of the contacts between the tape's layers, as the solver
+/// measured it (J), which is not the joints'.
 pub(super) fn step_work(
     bodies: &[Moved],
     floor: &[(usize, FloorImpulse)],
     gravity: Vector,
     dt: f64,
-    gravity_work_j: Option<f64>,
+    (gravity_work_j, layers_j): (Option<f64>, f64),
 ) -> StepWork {
     let (mut normal_w, mut friction_w) = (0.0, 0.0);
     let mut floor_w = vec![0.0; bodies.len()];
@@ -236,7 +246,7 @@ pub(super) fn step_work(
                 .iter()
                 .map(|m| m.after.kinetic_j - m.before.kinetic_j)
                 .sum();
-            kinetic - gravity_w - normal_w - friction_w
+            kinetic - gravity_w - normal_w - friction_w - layers_j
         }
         None => bodies
             .iter()

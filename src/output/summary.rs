@@ -92,9 +92,14 @@ fn bang_summary(o: &mut String, report: &RunReport, bang: &crate::run::BangRepor
     );
     let _ = writeln!(
         o,
-        "  received {:.5} J of kinetic energy; fastest point {:.4} m/s; peak floor force {:.4e} N; \
-         floor impulse {:.4e} N s",
-        bang.kinetic_in_j, bang.top_speed_m_s, bang.peak_floor_force_n, bang.floor_impulse_n_s
+        "  received {:.5} J of kinetic energy, every speed scaled by {:.4} at the release for \
+         the pieces' thickness (the energy kept); fastest point {:.4} m/s; peak floor force \
+         {:.4e} N; floor impulse {:.4e} N s",
+        bang.kinetic_in_j,
+        bang.thickness_speed_ratio,
+        bang.top_speed_m_s,
+        bang.peak_floor_force_n,
+        bang.floor_impulse_n_s
     );
     let d = l.dissipated_by_bang_j;
     let b = &l.bang;
@@ -103,12 +108,16 @@ fn bang_summary(o: &mut String, report: &RunReport, bang: &crate::run::BangRepor
         let _ = writeln!(
             o,
             "  dissipated {d:.5} J, measured where it happened (shares of what it dissipated): \
-             floor impacts {:.5} J ({:.1} %), floor friction {:.5} J ({:.1} %), freezing {:.5} J \
-             ({:.2} %);",
+             floor impacts {:.5} J ({:.1} %), floor friction {:.5} J ({:.1} %), layers' impacts \
+             {:.5} J ({:.1} %), layers' friction {:.5} J ({:.1} %), freezing {:.5} J ({:.2} %);",
             b.floor_normal_j,
             of(b.floor_normal_j),
             b.floor_friction_j,
             of(b.floor_friction_j),
+            b.layers_normal_j,
+            of(b.layers_normal_j),
+            b.layers_friction_j,
+            of(b.layers_friction_j),
             b.freeze_j,
             of(b.freeze_j)
         );
@@ -305,6 +314,16 @@ fn health_summary(o: &mut String, report: &RunReport) {
         report.max_penetration_m,
         report.bounds.penetration_m
     );
+    if report.bang.is_some() {
+        let b = report.scene.tape.thickness_m;
+        let _ = writeln!(
+            o,
+            "Deepest overlap of the tape's layers in the bang {:.2e} m ({:.3} % of b; bound {:.2e} m).",
+            report.max_overlap_m,
+            100.0 * report.max_overlap_m / b,
+            report.bounds.overlap_m
+        );
+    }
     let _ = writeln!(
         o,
         "Max energy rise above E0 {:+.2e} of S (the guard's bound {:.3e} J); fastest spin {:.4e} rad/s.",

@@ -30,6 +30,10 @@ pub const JOINT_GAP_PER_LINK: f64 = 0.01;
 /// A run stops when a collider sinks into the floor deeper than this fraction of the outer
 /// radius R, or a body's centre of mass falls that far below the floor.
 pub const PENETRATION_PER_RADIUS: f64 = 0.25;
+/// A run stops when two layers of the tape overlap by more than this many thicknesses b:
+/// beyond half a thickness a piece's node lies nearer the far face of the layer it meets
+/// than the near one, and the two layers can pass through each other.
+pub const OVERLAP_PER_THICKNESS: f64 = 0.5;
 /// A run stops when a body's centre of mass is farther from the start of the tape than this
 /// many times the tape's length plus R (plus the distance the push alone covers in
 /// `stop.max_time_s`).
@@ -44,6 +48,9 @@ pub struct Bounds {
     pub joint_gap_m: f64,
     /// Largest allowed floor penetration, and depth of a centre of mass below the floor (m).
     pub penetration_m: f64,
+    /// Largest allowed overlap of two layers of the tape (m).
+    #[serde(default)]
+    pub overlap_m: f64,
     /// Largest allowed distance of a body from the start of the tape (m).
     pub world_radius_m: f64,
     /// Whether the tape can reach the floor (not on a fixed axis, where it hangs): only
@@ -70,6 +77,7 @@ impl Bounds {
             joint_gap_m: (JOINT_GAP_PER_THICKNESS * t.thickness_m)
                 .max(JOINT_GAP_PER_LINK * outer_link_m(scene)),
             penetration_m: PENETRATION_PER_RADIUS * t.outer_radius_m,
+            overlap_m: OVERLAP_PER_THICKNESS * t.thickness_m,
             world_radius_m: WORLD_PER_LENGTH * (length + t.outer_radius_m)
                 + scene.push.contact_speed_m_s * scene.stop.max_time_s,
             floor_in_reach: !scene.axis.fixed,
@@ -147,6 +155,9 @@ impl Guard {
                 b.penetration_m,
             );
         }
+        if obs.max_overlap_m > b.overlap_m {
+            return trip(GuardKind::Overlap, obs.max_overlap_m, b.overlap_m);
+        }
         if b.floor_in_reach && -health.lowest_m > b.penetration_m {
             return trip(GuardKind::FellThrough, health.lowest_m, b.penetration_m);
         }
@@ -175,6 +186,7 @@ fn non_finite(obs: &Observation, health: &Health) -> Option<&'static str> {
         ("friction_n", obs.friction_n),
         ("max_joint_gap_m", obs.max_joint_gap_m),
         ("max_penetration_m", obs.max_penetration_m),
+        ("max_overlap_m", obs.max_overlap_m),
     ];
     if let Some((name, _)) = named.iter().find(|(_, v)| !v.is_finite()) {
         return Some(name);
@@ -203,6 +215,9 @@ pub enum GuardKind {
     JointGap,
     /// A body sank into the floor deeper than the bound (m).
     Penetration,
+    /// Two layers of the tape overlapped by more than the bound (m): it is passing through
+    /// itself.
+    Overlap,
     /// A body's centre of mass fell below the floor by more than the bound (m); the value
     /// is its height.
     FellThrough,
@@ -232,6 +247,7 @@ impl GuardTrip {
             GuardKind::EnergyRise => "energy-rise",
             GuardKind::JointGap => "joint-gap",
             GuardKind::Penetration => "penetration",
+            GuardKind::Overlap => "overlap",
             GuardKind::FellThrough => "fell-through",
             GuardKind::LeftWorld => "left-world",
         }
@@ -262,6 +278,11 @@ impl fmt::Display for GuardTrip {
                 f,
                 "floor penetration at t = {t:.6} s: {v:.4e} m, above the bound {b:.4e} m \
                  ({PENETRATION_PER_RADIUS} R)"
+            ),
+            GuardKind::Overlap => write!(
+                f,
+                "layers overlapping at t = {t:.6} s: {v:.4e} m, above the bound {b:.4e} m \
+                 ({OVERLAP_PER_THICKNESS} b): the tape is passing through itself"
             ),
             GuardKind::FellThrough => write!(
                 f,
@@ -303,6 +324,7 @@ pub(crate) mod tests {
             active_bodies: 4,
             max_joint_gap_m: 1e-5,
             max_penetration_m: 1e-5,
+            max_overlap_m: 0.0,
             dt_s: 1e-3,
             angular_momentum_o: 0.0,
             impulses: crate::model::StepImpulses::default(),

@@ -149,6 +149,11 @@ pub struct BangReport {
     /// How the exact chain solved the bang's steps (all zero on the engine's).
     #[serde(default)]
     pub solve: SolveStats,
+    /// The ratio the handover scaled every speed by at the release, for the pieces'
+    /// thickness: the energy the unroll brought kept, the pieces turning with their own
+    /// inertia `m b^2 / 12` more than their midlines'.
+    #[serde(default)]
+    pub thickness_speed_ratio: f64,
 }
 
 /// The approach to the bang: how far the contact line's speed diverged before the coil was
@@ -256,4 +261,8 @@ pub struct RunReport {
     pub max_joint_gap_m: f64,
     /// Deepest floor penetration seen (m).
     pub max_penetration_m: f64,
+    /// Deepest two layers of the tape overlapped at the end of a step (m): pieces not
+    /// joined to each other, or a piece and the laid tape.
+    #[serde(default)]
+    pub max_overlap_m: f64,
 }

@@ -76,6 +76,7 @@ pub(crate) struct Runner<'s> {
     bang: Option<(f64, Observation)>,
     max_gap: f64,
     max_pen: f64,
+    max_overlap: f64,
     frame_interval: f64,
     next_frame: f64,
     /// The bang's drawings so far, and the time since the release of its last one (s).
@@ -138,6 +139,7 @@ impl<'s> Runner<'s> {
             bang: None,
             max_gap: 0.0,
             max_pen: 0.0,
+            max_overlap: 0.0,
             ghost_grid,
             frame_interval,
             next_frame: frame_interval,
@@ -192,6 +194,7 @@ impl<'s> Runner<'s> {
         }
         self.max_gap = self.max_gap.max(obs.max_joint_gap_m);
         self.max_pen = self.max_pen.max(obs.max_penetration_m);
+        self.max_overlap = self.max_overlap.max(obs.max_overlap_m);
         let mut events = self.follow(&obs);
         self.limits.observe(&obs, &health, self.xdot);
         self.track_peak(&obs);
@@ -396,10 +399,12 @@ impl<'s> Runner<'s> {
                 still_moving_j: last.kinetic_j,
                 ended_by: last.bang.end,
                 solve: last.bang.solve,
+                thickness_speed_ratio: last.bang.thickness_speed_ratio,
             }),
             geo_hop_fraction: self.refs.exact.hop_onset_fraction(),
             max_joint_gap_m: self.max_gap,
             max_penetration_m: self.max_pen,
+            max_overlap_m: self.max_overlap,
         };
         for o in observers.iter_mut() {
             o.observe_final(&report)?;

@@ -49,6 +49,11 @@ pub struct Sample {
     pub bang_floor_normal_j: f64,
     /// Final bang: dissipated against the floor's friction impulses so far (J).
     pub bang_floor_friction_j: f64,
+    /// Final bang: dissipated against the normal impulses between the tape's own layers so
+    /// far (J).
+    pub bang_layers_normal_j: f64,
+    /// Final bang: dissipated against the friction between the tape's own layers so far (J).
+    pub bang_layers_friction_j: f64,
     /// Final bang: dissipated against the joint impulses so far, numerical (J).
     pub bang_joints_j: f64,
     /// Final bang: kinetic energy the model discarded so far, joining the links into pieces
@@ -260,6 +265,8 @@ pub(crate) fn make_sample(obs: &Observation, xdot: f64, e0: f64, refs: &Referenc
         lost_bang_j: obs.ledger.bang_j,
         bang_floor_normal_j: obs.bang.ledger.floor_normal_j,
         bang_floor_friction_j: obs.bang.ledger.floor_friction_j,
+        bang_layers_normal_j: obs.bang.ledger.layers_normal_j,
+        bang_layers_friction_j: obs.bang.ledger.layers_friction_j,
         bang_joints_j: obs.bang.ledger.joints_j,
         bang_freeze_j: obs.bang.ledger.freeze_j,
         bang_residual_j: obs.bang.ledger.residual_j,

@@ -17,6 +17,7 @@ pub const SCENE_KEYS: &[&str] = &[
     "tape.thickness_m",
     "tape.mass_kg",
     "tape.core_radius_m",
+    "tape.self_friction",
     "discretisation.links_per_turn",
     "floor.friction",
     "floor.slope_deg",
@@ -122,6 +123,8 @@ pub(super) struct TapeFile {
     pub(super) mass_kg: f64,
     #[serde(default)]
     pub(super) core_radius_m: f64,
+    #[serde(default)]
+    pub(super) self_friction: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -421,7 +424,7 @@ mod tests {
                 "tape.mass_kg" => "1.5",
                 "tape.core_radius_m" | "floor.slope_deg" => "0.0",
                 "discretisation.links_per_turn" => "32",
-                "floor.friction" => "1.0",
+                "floor.friction" | "tape.self_friction" => "1.0",
                 "floor.sticky" | "axis.fixed" => "false",
                 "gravity.g_m_s2" => "9.81",
                 "push.contact_speed_m_s" => "0.3",

@@ -51,6 +51,10 @@ impl Scene {
         let tape = tape(&file.tape)?;
         let links_per_turn = discretisation(&file.discretisation, &tape)?;
         let (friction, slope_deg) = floor(&file.floor)?;
+        let tape = Tape {
+            self_friction: self_friction(file.tape.self_friction, friction)?,
+            ..tape
+        };
         let g_m_s2 = check(
             "gravity.g_m_s2",
             file.gravity.g_m_s2,
@@ -134,7 +138,17 @@ fn tape(t: &TapeFile) -> Result<Tape, SceneError> {
         thickness_m: b,
         mass_kg: mass,
         core_radius_m: core,
+        // Set once the floor's coefficient, its default, is known (`self_friction`).
+        self_friction: 0.0,
     })
+}
+
+/// `tape.self_friction`: >= 0, or the floor's coefficient `floor_friction` where not set.
+fn self_friction(value: Option<f64>, floor_friction: f64) -> Result<f64, SceneError> {
+    match value {
+        None => Ok(floor_friction),
+        Some(mu) => check("tape.self_friction", mu, mu >= 0.0, "must be >= 0"),
+    }
 }
 
 /// `[discretisation]`: links shorter than R, within the count range, at most

@@ -7,8 +7,17 @@
 
 use super::*;
 use crate::model::exact_chain::{
-    self, Body, ExactChain, Floor, Joint, Pin, SolveStats, StepError, Tolerance,
+    self, Body, ExactChain, Floor, Joint, Layers, Outline, Pin, SolveStats, StepError, Surface,
+    Tolerance,
 };
+
+/// Two points of the tape closer than this many thicknesses along it never meet as layers:
+/// `pi / 2`, the midline of the tightest fold a tape of thickness b can make (a half circle
+/// of radius b/2). Points closer along the tape are within one fold and cannot face each
+/// other; points farther apart can, so a fold between two pieces is held open by their far
+/// parts meeting. A coreless coil's innermost turn (its midline starts at radius b/2) does
+/// not overlap itself beyond it.
+const LAYER_EXCLUSION_PER_THICKNESS: f64 = std::f64::consts::FRAC_PI_2;
 
 /// The exact chain of the bang's moving pieces, and how its steps went.
 pub(in crate::model) struct ExactBang {
@@ -23,12 +32,17 @@ pub(in crate::model) struct ExactBang {
     pub(in crate::model) stats: SolveStats,
     /// The deepest a contact point ended below the floor in the last step (m).
     pub(in crate::model) penetration_m: f64,
+    /// The deepest two layers overlapped at the end of the last step (m).
+    pub(in crate::model) overlap_m: f64,
     /// The failure that stopped it, if any.
     pub(in crate::model) failed: Option<StepError>,
     /// Gravity's work over the last step (J).
     pub(in crate::model) gravity_work_j: f64,
     /// What the joints took in the last step when they were made rigid (J).
     pub(in crate::model) caught_j: f64,
+    /// The work of the contacts between the tape's layers in the last step: their normal
+    /// and friction impulses' (J; negative: taken from the tape).
+    pub(in crate::model) layers_work_j: [f64; 2],
     /// Each body's nodes in its own axes, from its centre of mass (m).
     nodes: Vec<Vec<[f64; 2]>>,
     /// The bodies before the last step that was solved, and that step's length (s): with
@@ -64,6 +78,7 @@ impl Model {
                 exact.before.1 = dt;
                 exact.stats.add(&report);
                 exact.penetration_m = report.penetration_m;
+                exact.overlap_m = report.overlap_m;
                 exact.gravity_work_j = report.gravity_work_j;
                 exact.caught_j = report.caught_j;
             }
@@ -89,10 +104,21 @@ impl Model {
                 .map(|&h| engine_state(&self.world.bodies[h])),
         );
         self.bang.solve = exact.stats;
+        exact.layers_work_j = [0.0; 2];
+        for c in exact
+            .chain
+            .contacts()
+            .iter()
+            .filter(|c| c.on != Surface::Floor)
+        {
+            exact.layers_work_j[0] += c.work_j[0];
+            exact.layers_work_j[1] += c.work_j[1];
+        }
         exact
             .chain
             .contacts()
             .iter()
+            .filter(|c| c.on == Surface::Floor)
             .map(|c| {
                 let impulse =
                     work::FloorImpulse::of_chain(c.normal_n_s, c.friction_n_s, c.arm_m, c.work_j);
@@ -206,7 +232,12 @@ impl Model {
             .zip(&centres)
             .map(|(&p, &c)| self.piece_nodes(p).map(|n| at(n - c)).collect())
             .collect();
-        chain.set_floor(self.chain_floor(), &contact_points(&nodes, pin.is_some()));
+        // The floor's contact plane is the laid tape's midline: with the tape's thickness the
+        // chain meets the floor itself at the pieces' faces, half a thickness lower.
+        let mut floor = self.chain_floor();
+        floor.point_m[1] -= self.settings.half_b;
+        chain.set_floor(floor, &contact_points(&nodes, pin.is_some()));
+        chain.set_layers(self.layers(&nodes));
         ExactBang {
             nodes,
             before: (Vec::new(), 0.0),
@@ -218,14 +249,44 @@ impl Model {
             centres,
             stats: SolveStats::default(),
             penetration_m: 0.0,
+            overlap_m: 0.0,
             failed: None,
             gravity_work_j: 0.0,
             caught_j: 0.0,
+            layers_work_j: [0.0; 2],
         }
     }
 }
 
 impl Model {
+    /// The tape's thickness as the exact chain takes it: each moving piece's midline (its
+    /// `nodes`, from its centre of mass) and the frozen tape's, each node with its arc along
+    /// the tape.
+    fn layers(&self, nodes: &[Vec<[f64; 2]>]) -> Layers {
+        let arc = &self.chain.arc_m;
+        let outlines = self
+            .chain
+            .free
+            .iter()
+            .zip(nodes)
+            .map(|(p, n)| Outline {
+                nodes: n.clone(),
+                arc_m: arc[p.first..=p.last + 1].to_vec(),
+            })
+            .collect();
+        let frozen = &self.chain.frozen_nodes;
+        Layers {
+            radius_m: self.settings.half_b,
+            friction: self.settings.self_friction,
+            exclusion_m: LAYER_EXCLUSION_PER_THICKNESS * 2.0 * self.settings.half_b,
+            outlines,
+            laid: Outline {
+                nodes: frozen.clone(),
+                arc_m: arc[..frozen.len()].to_vec(),
+            },
+        }
+    }
+
     /// The moving pieces `handles` as the bang's exact chain takes them: each
     /// body's centre of mass in its own frame, and its state about it.
     pub(super) fn chain_bodies(&self, handles: &[RigidBodyHandle]) -> (Vec<Vector>, Vec<Body>) {
@@ -325,5 +386,20 @@ pub(super) fn exact_body(body: &RigidBody, centre: Vector) -> Body {
         angle_rad: body.rotation().angle(),
         velocity_m_s: [v.x, v.y],
         spin_rad_s: body.angvel(),
+    }
+}
+
+impl ExactBang {
+    /// The pieces a contact pressed or rubbed in the last step, the floor, the laid tape or
+    /// another piece.
+    pub(in crate::model) fn touched(&self) -> std::collections::HashSet<RigidBodyHandle> {
+        let mut touched = std::collections::HashSet::new();
+        for c in self.chain.contacts() {
+            touched.insert(self.bodies[c.body]);
+            if let Surface::Body(o) = c.on {
+                touched.insert(self.bodies[o]);
+            }
+        }
+        touched
     }
 }

@@ -3,15 +3,18 @@
 //! half kick of gravity and the drift, every joint closed at the step's end; a half kick of
 //! gravity and the joints held at the end's pose.
 
-use super::{ContactImpulse, ExactChain, StepError, StepReport};
+use super::{ContactImpulse, ExactChain, StepError, StepReport, Surface};
 
 mod active;
 mod delassus;
+mod dense;
+mod layers;
 mod modes;
 mod rows;
 
-use modes::Impulses;
+pub(super) use layers::{Key, LaidIndex};
 pub(super) use modes::SLOP;
+use modes::{Impulses, Source};
 use rows::{Pose, Row, Stage};
 
 /// The step's working memory, kept from step to step.
@@ -21,6 +24,9 @@ pub(super) struct Scratch {
     free: Vec<[f64; 3]>,
     /// Gravity (m/s^2) and the step's length (s).
     gravity: [f64; 2],
+    /// The velocity gravity's half kick gives each body with the joints held, `(u, w,
+    /// omega)`: what a contact's target before the drift meets ([`modes`]).
+    fall: Vec<[f64; 3]>,
     h: f64,
     /// What the rows' impulses add to: the stage's starting velocity (for the impulses, with
     /// the sliding contacts' friction).
@@ -39,6 +45,16 @@ pub(super) struct Scratch {
     start_pose: Pose,
     end_pose: Pose,
     candidates: Vec<modes::Candidate>,
+    /// The layers' features the step measures ([`layers::near`]), and each body's margin
+    /// they were found within (m).
+    near: Vec<Key>,
+    near_margin: Vec<f64>,
+    /// Each time `near` was found.
+    near_generation: u64,
+    /// The layers' touches of `near` at `start_pose` ([`modes::measure`]), and the
+    /// generations of the two they were measured at.
+    touches: Vec<layers::Touch>,
+    measured: Option<(u64, u64)>,
     rows: Vec<Row>,
     /// Where [`rows::build`]'s extra rows went among `rows`.
     extra_at: Vec<usize>,
@@ -48,6 +64,9 @@ pub(super) struct Scratch {
     saved: Vec<super::Body>,
     /// Each contact point's height above the floor at the step's start (m).
     start_gaps: Vec<f64>,
+    /// The layers' touches that overlap at the step's start, and by how much (m, negative),
+    /// by key: the depth a step may leave them at.
+    layer_start_gaps: Vec<(Key, f64)>,
     /// Where `ExactChain::system` holds the factorisation of the joints held with no
     /// contact ([`rows::solve_held`]), each body's position, angle, mass and inertia it was
     /// made at; empty where it holds another.
@@ -81,9 +100,10 @@ fn stages(
     gravity: [f64; 2],
     may_halve: bool,
 ) -> Result<StepReport, StepError> {
-    prepare(chain, s, gravity);
     s.h = h;
+    prepare(chain, s, gravity);
     chain.contacts.clear();
+    held_fall(chain, s, h)?;
     modes::gather(chain, s, Impulses::Start(h));
     let mut report = if chain.fresh || !s.candidates.is_empty() {
         impulses(chain, s, Impulses::Start(h))?
@@ -133,6 +153,7 @@ fn stages(
         return Err(StepError::NonFinite);
     }
     report.penetration_m = modes::penetration(chain, s);
+    report.overlap_m = modes::overlap(chain, s);
     for (b, v) in chain.bodies.iter_mut().zip(&s.v) {
         b.velocity_m_s = [v[0], v[1]];
         b.spin_rad_s = v[2];
@@ -151,9 +172,18 @@ fn impulses(
 ) -> Result<StepReport, StepError> {
     let mut report = StepReport::default();
     for _ in 0..4 {
-        // The active set where many points touch; Gauss-Seidel for a few, or where the
-        // active set's modes did not settle.
-        let settled = if s.candidates.len() >= active::FROM_CONTACTS {
+        // Few contacts: the active set on their Delassus matrix where the tape has its
+        // thickness (Gauss-Seidel converges slowly on tape piled on laid tape), else
+        // Gauss-Seidel. Many: the active set in the joints' band, unless a contact joins
+        // two bodies (the tape's layers), whose rows would break the band; then
+        // Gauss-Seidel, as the dense active set's direct solves grow as the cube of the
+        // contacts (on the frictionless coil, 300 contacts, 0.3 s a stage). Gauss-Seidel
+        // wherever an active set's modes did not settle.
+        let few = s.candidates.len() < active::FROM_CONTACTS;
+        let pairs = s.candidates.iter().any(|c| c.other.is_some());
+        let settled = if few && chain.layers.is_some() && !s.candidates.is_empty() {
+            dense::solve(chain, s)?
+        } else if !few && !pairs {
             active::solve(chain, s)?
         } else {
             None
@@ -170,6 +200,29 @@ fn impulses(
     }
     Ok(report)
 }
+
+/// Gravity's half kick over `h`, with the joints held, into `s.fall`: the velocity the
+/// drift's first half kick adds across each contact. One more solve of the joints' system,
+/// factorised at the start's pose as the impulses' own is (`rows::solve_held` keeps it).
+fn held_fall(chain: &mut ExactChain, s: &mut Scratch, h: f64) -> Result<(), StepError> {
+    let kick = [0.5 * h * s.gravity[0], 0.5 * h * s.gravity[1], 0.0];
+    if chain.floor.is_some() || chain.layers.is_some() {
+        let free = std::mem::replace(&mut s.free, vec![kick; chain.bodies.len()]);
+        let held = delassus::hold(chain, s);
+        s.free = free;
+        held?;
+        std::mem::swap(&mut s.fall, &mut s.v);
+        s.v.clone_from(&s.free);
+    } else {
+        s.fall.clear();
+        s.fall.resize(chain.bodies.len(), kick);
+    }
+    Ok(())
+}
+
+/// A moved contact's row on one body: the body, its point's Jacobian along the normal, and
+/// how far short of its place it is (m).
+type OneBody = (usize, [f64; 3], f64);
 
 /// A chord iteration of the drift must shrink the widest gap at least this many times, or
 /// the next iteration factorises the system again (a full Newton iteration).
@@ -229,61 +282,181 @@ fn drift(
     Ok((iterations, closed))
 }
 
-/// Moves the bodies, not their velocities, out of the floor where the drift took a contact
-/// point deeper than the slop (a point moves on an arc over the step, not on its
-/// velocity's line), keeping the joints closed: the mass-weighted least move, by the same
-/// block-tridiagonal solve, a few times over if the move takes other points below; whether
-/// it converged. Pushing them out by velocity instead would add their depth over the step
-/// to their speed.
+/// Moves the bodies, not their velocities, out of the floor and out of each other where the
+/// drift took a contact deeper than the slop (a point moves on an arc over the step, not on
+/// its velocity's line), keeping the joints closed: the mass-weighted least move, by the same
+/// block-tridiagonal solve (a contact between two bodies as an auxiliary row against it,
+/// `delassus::matrix`), a few times over if the move takes others in; whether it converged.
+/// Pushing them out by velocity instead would add their depth over the step to their speed.
 fn project_out(chain: &mut ExactChain, s: &mut Scratch) -> Result<bool, StepError> {
-    let Some(floor) = chain.floor else {
+    if chain.floor.is_none() && chain.layers.is_none() {
         return Ok(true);
-    };
+    }
     let tol = position_tolerance(chain);
-    let deepest = modes::SLOP * tol;
-    // (body, point, the depth it may keep): points once moved stay in the projection until
-    // it ends. A point the step began with below the floor (the engine's laid tape sits its
-    // inset below it) may stay as deep, no deeper.
-    let mut deep: Vec<(usize, [f64; 2], f64)> = Vec::new();
+    let deep_by = SLOP * tol;
+    let mut deep = Deep::default();
     let mut moved = vec![false; chain.vertices.len()];
     for _ in 0..chain.tolerance.max_iterations {
-        let before = deep.len();
-        for i in 0..chain.bodies.len() {
-            let range = chain.vertex_at[i]..chain.vertex_at[i + 1];
-            for (v, moved) in range.clone().zip(&mut moved[range]) {
-                let local = chain.vertices[v];
-                let floor_at = s.start_gaps[v].min(0.0);
-                let below = floor.gap(s.start_pose.point(i, local)) < floor_at - deepest;
-                if below && !*moved {
-                    *moved = true;
-                    deep.push((i, local, floor_at));
-                }
-            }
+        let grew = deep.find(chain, s, &mut moved, deep_by);
+        if grew {
+            deep.floor.sort_by_key(|d| d.0);
         }
-        if deep.len() > before {
-            deep.sort_by_key(|d| d.0);
-        }
-        let closed = deep
-            .iter()
-            .all(|&(i, local, at)| (floor.gap(s.start_pose.point(i, local)) - at).abs() <= tol);
+        let (rows, pairs) = deep.rows(chain, s);
+        let closed =
+            rows.iter().all(|r| r.2.abs() <= tol) && pairs.iter().all(|p| p.1.abs() <= tol);
         if closed && s.start_pose.joint_gap(chain) <= tol {
             return Ok(true);
         }
-        rows::build_projection(chain, s, &deep);
+        rows::build_projection(chain, s, &rows);
         rows::solve(chain, s)?;
+        if pairs.is_empty() {
+            for (r, &y) in s.rows.iter().zip(&s.x) {
+                for a in 0..r.count {
+                    let (b, d) = (r.body[a], r.d[a]);
+                    let w = s.inv[b];
+                    let body = &mut chain.bodies[b];
+                    body.position_m[0] += w[0] * d[0] * y;
+                    body.position_m[1] += w[1] * d[1] * y;
+                    body.angle_rad += w[2] * d[2] * y;
+                }
+            }
+            s.start_pose.take(chain, None);
+            continue;
+        }
+        let mut dq = vec![[0.0; 3]; chain.bodies.len()];
         for (r, &y) in s.rows.iter().zip(&s.x) {
             for a in 0..r.count {
                 let (b, d) = (r.body[a], r.d[a]);
                 let w = s.inv[b];
-                let body = &mut chain.bodies[b];
-                body.position_m[0] += w[0] * d[0] * y;
-                body.position_m[1] += w[1] * d[1] * y;
-                body.angle_rad += w[2] * d[2] * y;
+                for k in 0..3 {
+                    dq[b][k] += w[k] * d[k] * y;
+                }
             }
+        }
+        let dirs: Vec<delassus::Dir> = pairs.iter().map(|p| p.0).collect();
+        let w = delassus::matrix(chain, s, &dirs);
+        let rhs: Vec<f64> = pairs
+            .iter()
+            .map(|(dir, miss)| miss - dir.speed(&dq))
+            .collect();
+        let p = delassus::push_apart(&w, &rhs);
+        delassus::respond(chain, s, &dirs, &p, true, &mut dq)?;
+        for (body, d) in chain.bodies.iter_mut().zip(&dq) {
+            body.position_m[0] += d[0];
+            body.position_m[1] += d[1];
+            body.angle_rad += d[2];
         }
         s.start_pose.take(chain, None);
     }
     Ok(false)
+}
+
+/// The contacts a projection moves out: once moved, each stays in it until it ends.
+#[derive(Default)]
+struct Deep {
+    /// The floor's: (body, point in its axes, the height it is to be at).
+    floor: Vec<(usize, [f64; 2], f64)>,
+    /// The layers': each touch's key and the gap it is to be at (its overlap at the step's
+    /// start, if any; else 0), by key.
+    layers: Vec<(Key, f64)>,
+}
+
+impl Deep {
+    /// Adds the contacts now deeper than `deep_by` below where they may be; whether a floor
+    /// point was added.
+    fn find(
+        &mut self,
+        chain: &ExactChain,
+        s: &mut Scratch,
+        moved: &mut [bool],
+        deep_by: f64,
+    ) -> bool {
+        let before = self.floor.len();
+        if let Some(floor) = chain.floor {
+            let r = chain.radius_m();
+            // A point the step began with below the floor (the engine's laid tape sits its
+            // inset below it) may stay as deep, no deeper.
+            for i in 0..chain.bodies.len() {
+                let range = chain.vertex_at[i]..chain.vertex_at[i + 1];
+                for (v, moved) in range.clone().zip(&mut moved[range]) {
+                    let local = chain.vertices[v];
+                    let floor_at = s.start_gaps[v].min(0.0);
+                    let gap = floor.gap(s.start_pose.point(i, local)) - r;
+                    if gap < floor_at - deep_by && !*moved {
+                        *moved = true;
+                        self.floor.push((i, local, floor_at));
+                    }
+                }
+            }
+        }
+        if chain.layers.is_some() {
+            modes::measure(chain, s);
+            let touches = std::mem::take(&mut s.touches);
+            for t in &touches {
+                let at = s
+                    .layer_start_gaps
+                    .binary_search_by_key(&t.key, |g| g.0)
+                    .map_or(0.0, |i| s.layer_start_gaps[i].1);
+                if t.gap_m < at - deep_by
+                    && let Err(i) = self.layers.binary_search_by_key(&t.key, |d| d.0)
+                {
+                    self.layers.insert(i, (t.key, at));
+                }
+            }
+            s.touches = touches;
+        }
+        self.floor.len() > before
+    }
+
+    /// The rows of the moved contacts at `s.start_pose`: those on one body (the floor's, the
+    /// laid tape's) as (body, Jacobian, how far short of its place), by body; those between
+    /// two bodies as directions with how far short.
+    fn rows(
+        &self,
+        chain: &ExactChain,
+        s: &mut Scratch,
+    ) -> (Vec<OneBody>, Vec<(delassus::Dir, f64)>) {
+        let mut one: Vec<OneBody> = Vec::new();
+        let mut two = Vec::new();
+        if let Some(floor) = chain.floor {
+            let r = chain.radius_m();
+            for &(i, local, at) in &self.floor {
+                let a = s.start_pose.arm(i, local);
+                let gap = floor.gap(s.start_pose.point(i, local)) - r;
+                one.push((i, rows::along(floor.normal, a), at - gap));
+            }
+        }
+        if !self.layers.is_empty() {
+            modes::measure(chain, s);
+            let touches = std::mem::take(&mut s.touches);
+            for t in &touches {
+                let Ok(i) = self.layers.binary_search_by_key(&t.key, |d| d.0) else {
+                    continue;
+                };
+                let at = self.layers[i].1;
+                let offset = |b: usize| {
+                    let c = s.start_pose.centre(b);
+                    [t.point[0] - c[0], t.point[1] - c[1]]
+                };
+                let d = rows::along(t.normal, offset(t.body));
+                match t.other {
+                    None => one.push((t.body, d, at - t.gap_m)),
+                    Some(o) => {
+                        let back = rows::along([-t.normal[0], -t.normal[1]], offset(o));
+                        let dir = delassus::Dir {
+                            body: t.body,
+                            d,
+                            other: Some((o, back)),
+                        };
+                        two.push((dir, at - t.gap_m));
+                    }
+                }
+            }
+            s.touches = touches;
+        }
+        one.sort_by_key(|r| r.0);
+        (one, two)
+    }
 }
 
 /// `v` with gravity's impulse over `dt` added.
@@ -348,44 +521,74 @@ fn prepare(chain: &ExactChain, s: &mut Scratch, gravity: [f64; 2]) {
     s.start_pose.take(chain, None);
     s.start_gaps.clear();
     if let Some(floor) = chain.floor {
+        let r = chain.radius_m();
         for i in 0..chain.bodies.len() {
             for &local in &chain.vertices[chain.vertex_at[i]..chain.vertex_at[i + 1]] {
-                s.start_gaps.push(floor.gap(s.start_pose.point(i, local)));
+                s.start_gaps
+                    .push(floor.gap(s.start_pose.point(i, local)) - r);
             }
         }
+    }
+    s.layer_start_gaps.clear();
+    if chain.layers.is_some() {
+        let free = std::mem::take(&mut s.free);
+        modes::find_near(chain, s, s.h, &free);
+        s.free = free;
+        modes::measure(chain, s);
+        let touches = std::mem::take(&mut s.touches);
+        s.layer_start_gaps.extend(
+            touches
+                .iter()
+                .filter(|t| t.gap_m < 0.0)
+                .map(|t| (t.key, t.gap_m)),
+        );
+        s.touches = touches;
     }
 }
 
 /// Keeps the contacts' impulses of the stage just solved, their work, and their impulses as
 /// the next stage's first guess. Returns their work (J). Each impulse's work is it times the
-/// mean velocity of its point from `s.held` (the joints held, no contact) to `s.v`: both hold
-/// the joints, so the joints' impulses do no work between them and the contacts' work is
-/// that step's whole change of kinetic energy, however the impulse is shared among points
-/// that hold the same motion (several points of a piece flat on the floor). What the joints
-/// take from `s.free` to `s.held` is theirs.
+/// mean relative velocity of the points it acts between, from `s.held` (the joints held, no
+/// contact) to `s.v`: both hold the joints, so the joints' impulses do no work between them
+/// and the contacts' work is that step's whole change of kinetic energy, however the impulse
+/// is shared among points that hold the same motion (several points of a piece flat on the
+/// floor). What the joints take from `s.free` to `s.held` is theirs.
 fn record_contacts(chain: &mut ExactChain, s: &Scratch) -> f64 {
-    let Some(floor) = chain.floor else { return 0.0 };
     let mut total = 0.0;
     chain.warm.fill([0.0; 2]);
-    let (n, t) = (floor.normal, floor.tangent());
+    chain.layer_warm.clear();
     for c in &s.candidates {
-        chain.warm[c.vertex] = [c.normal, c.tangent];
+        match c.source {
+            Source::Floor(v) => chain.warm[v] = [c.normal, c.tangent],
+            Source::Layer(key) => chain.layer_warm.push((key, [c.normal, c.tangent])),
+        }
         if c.normal == 0.0 && c.tangent == 0.0 {
             continue;
         }
-        let (before, after) = (s.held[c.body], s.v[c.body]);
-        let mean = |j: [f64; 3]| 0.5 * (rows::dot3(j, before) + rows::dot3(j, after));
-        let (dn, dt) = (rows::along(n, c.arm), rows::along(t, c.arm));
-        let work_j = [c.normal * mean(dn), c.tangent * mean(dt)];
+        let (before, after) = (c.speeds(&s.held), c.speeds(&s.v));
+        let mean = |k: usize| 0.5 * (before[k] + after[k]);
+        let work_j = [c.normal * mean(0), c.tangent * mean(1)];
         total += work_j[0] + work_j[1];
+        let (n, t) = (c.n, c.t());
+        let on = modes::surface(c);
         chain.contacts.push(ContactImpulse {
             body: c.body,
-            vertex: c.vertex - chain.vertex_at[c.body],
+            vertex: match c.source {
+                Source::Floor(v) => v - chain.vertex_at[c.body],
+                Source::Layer(_) => 0,
+            },
+            on,
             normal_n_s: [n[0] * c.normal, n[1] * c.normal],
             friction_n_s: [t[0] * c.tangent, t[1] * c.tangent],
             arm_m: c.arm,
+            other_arm_m: if matches!(on, Surface::Body(_)) {
+                c.arm_other
+            } else {
+                [0.0; 2]
+            },
             work_j,
         });
     }
+    chain.layer_warm.sort_by_key(|w| w.0);
     total
 }

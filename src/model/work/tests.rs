@@ -147,7 +147,7 @@ impl Bench {
                 .filter_map(|(body, c)| Some((self.bodies.iter().position(|&b| b == body)?, c)))
                 .collect();
         let moved = moved(&self.world.bodies, self.bodies.iter().copied(), &before);
-        let w = step_work(&moved, &floor, self.world.gravity, dt, None);
+        let w = step_work(&moved, &floor, self.world.gravity, dt, (None, 0.0));
         self.booked.normal_j += w.normal_j;
         self.booked.friction_j += w.friction_j;
         self.booked.joints_j += w.joints_j;

@@ -23,7 +23,7 @@ pub enum Reading {
 
 /// The final bang's observables a bang study follows: a label and how to read it from a
 /// sweep row (`NaN` where the run has no bang).
-pub const BANG_OBSERVABLES: [(&str, Reading); 12] = [
+pub const BANG_OBSERVABLES: [(&str, Reading); 14] = [
     ("dissipated / kinetic in", Reading::DissipatedOfKineticIn),
     (
         "floor normal share",
@@ -32,6 +32,14 @@ pub const BANG_OBSERVABLES: [(&str, Reading); 12] = [
     (
         "floor friction share",
         Reading::Column(Col::BangFloorFrictionOf),
+    ),
+    (
+        "layers' impacts share",
+        Reading::Column(Col::BangLayersNormalOf),
+    ),
+    (
+        "layers' friction share",
+        Reading::Column(Col::BangLayersFrictionOf),
     ),
     ("freezing share", Reading::Column(Col::BangFreezeOf)),
     ("numerical share", NUMERICAL),

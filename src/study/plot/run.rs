@@ -382,34 +382,36 @@ fn bang_panel(
     let from = t.iter().position(|&ti| ti > bang_t).unwrap_or(t.len());
     let since: Vec<f64> = t[from..].iter().map(|ti| ti - bang_t).collect();
     let part = |c: &str| col(c).map(|v| pairs(&since, &v[from..]));
-    let curves = [
-        ("kinetic", part("kinetic_j")?, SIM, false),
-        (
-            "floor: normal impacts",
-            part("bang_floor_normal_j")?,
-            EXACT,
-            false,
-        ),
-        (
-            "floor: friction",
-            part("bang_floor_friction_j")?,
-            RGBColor(44, 160, 44),
-            false,
-        ),
-        ("joints (numerical)", part("bang_joints_j")?, EQ7, true),
-        (
-            "residual (numerical)",
-            part("bang_residual_j")?,
-            RGBColor(148, 103, 189),
-            true,
-        ),
-        (
-            "freezing",
-            part("bang_freeze_j")?,
-            RGBColor(127, 127, 127),
-            true,
-        ),
+    // Each mechanism's label and column, and its colour; the numerical parts and the
+    // model's discards are drawn dashed.
+    let parts = [
+        ("kinetic", "kinetic_j"),
+        ("floor: normal impacts", "bang_floor_normal_j"),
+        ("floor: friction", "bang_floor_friction_j"),
+        ("layers: impacts", "bang_layers_normal_j"),
+        ("layers: friction", "bang_layers_friction_j"),
+        ("joints (numerical)", "bang_joints_j"),
+        ("residual (numerical)", "bang_residual_j"),
+        ("freezing", "bang_freeze_j"),
     ];
+    let colors = [
+        SIM,
+        EXACT,
+        RGBColor(44, 160, 44),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        EQ7,
+        RGBColor(148, 103, 189),
+        RGBColor(127, 127, 127),
+    ];
+    let curves = parts
+        .into_iter()
+        .zip(colors)
+        .map(|((label, column), color)| {
+            let dashed = label.contains("numerical") || label == "freezing";
+            Ok((label, part(column)?, color, dashed))
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
     let (x0, x1) = log_range(since.iter().copied());
     let (y0, y1) = range(curves.iter().flat_map(|c| c.1.iter().map(|p| p.1)));
     let ticks = LogTicks::new((x0, x1), plot_size(area, true).0, X_TICK_ROOM_PX);

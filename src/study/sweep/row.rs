@@ -141,6 +141,10 @@ pub enum Col {
     BangFloorNormalOf,
     /// Its share to floor friction.
     BangFloorFrictionOf,
+    /// Its share to the layers' impacts on each other.
+    BangLayersNormalOf,
+    /// Its share to the layers' friction on each other.
+    BangLayersFrictionOf,
     /// Its share to the joints.
     BangJointsOf,
     /// Its share to frozen links.
@@ -200,11 +204,13 @@ impl Col {
     /// The final bang's columns (empty cells for a run stopped before the bang): what it
     /// received and dissipated, the split of what it dissipated by mechanism (fractions), its
     /// observables, and what ended it.
-    pub const BANG: [Self; 17] = [
+    pub const BANG: [Self; 19] = [
         Self::BangKineticIn,
         Self::BangDissipated,
         Self::BangFloorNormalOf,
         Self::BangFloorFrictionOf,
+        Self::BangLayersNormalOf,
+        Self::BangLayersFrictionOf,
         Self::BangJointsOf,
         Self::BangFreezeOf,
         Self::BangResidualOf,
@@ -247,6 +253,8 @@ impl Col {
             Self::BangDissipated => "bang_dissipated_j",
             Self::BangFloorNormalOf => "bang_floor_normal_of",
             Self::BangFloorFrictionOf => "bang_floor_friction_of",
+            Self::BangLayersNormalOf => "bang_layers_normal_of",
+            Self::BangLayersFrictionOf => "bang_layers_friction_of",
             Self::BangJointsOf => "bang_joints_of",
             Self::BangFreezeOf => "bang_freeze_of",
             Self::BangResidualOf => "bang_residual_of",
@@ -319,6 +327,8 @@ impl Col {
             Self::BangDissipated => num(l.dissipated_by_bang_j),
             Self::BangFloorNormalOf => of(split.floor_normal_j),
             Self::BangFloorFrictionOf => of(split.floor_friction_j),
+            Self::BangLayersNormalOf => of(split.layers_normal_j),
+            Self::BangLayersFrictionOf => of(split.layers_friction_j),
             Self::BangJointsOf => of(split.joints_j),
             Self::BangFreezeOf => of(split.freeze_j),
             Self::BangResidualOf => of(split.residual_j),

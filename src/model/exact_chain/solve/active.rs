@@ -14,8 +14,9 @@
 //! regularised by [`REGULARISATION`] of their own diagonal, so the system stays definite
 //! and the impulse is shared among them.
 
-use super::super::{ExactChain, Floor, REGULARISATION, StepError, StepReport};
-use super::rows::{self, Row, Stage, along, dot3, one, weighted};
+use super::super::{ExactChain, REGULARISATION, StepError, StepReport};
+use super::modes::Candidate;
+use super::rows::{self, Row, Stage, dot3, one, weighted};
 use super::{Scratch, position_tolerance};
 
 /// The fewest contact points a stage must have for the active set to solve it; fewer are
@@ -34,26 +35,113 @@ const STALE_PASSES: u32 = 3;
 
 /// A normal impulse this fraction of the largest below zero lets its contact go; a friction
 /// this fraction beyond its cone makes it slide.
-const SLACK: f64 = 1e-9;
+pub(super) const SLACK: f64 = 1e-9;
 
-/// A contact point's mode in a pass.
+/// A contact's mode in a pass.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Mode {
+pub(super) enum Mode {
     Off,
     Stick,
     /// Sliding: its friction impulse `sign * mu` times its normal one.
     Slide(f64),
 }
 
+/// The modes the candidates' last impulses suggest.
+pub(super) fn first_modes(candidates: &[Candidate]) -> Vec<Mode> {
+    candidates
+        .iter()
+        .map(|c| {
+            let mu = c.mu;
+            if c.normal <= 0.0 {
+                Mode::Off
+            } else if mu > 0.0 && c.tangent.abs() < mu * c.normal * (1.0 - SLACK) {
+                Mode::Stick
+            } else if mu > 0.0 {
+                Mode::Slide(c.tangent.signum())
+            } else {
+                Mode::Slide(0.0)
+            }
+        })
+        .collect()
+}
+
+/// The mode that mends what a solve broke of a contact in `mode` (its coefficient `mu` and
+/// target), given its impulses `p` and velocities `u` (normal, tangent) after the solve;
+/// `scale` is the largest normal impulse of the solve, `tol_speed` the velocities'
+/// tolerance. The same mode where nothing is broken: a normal impulse pulling, friction
+/// outside its cone, a slip friction would not oppose, a free point going below its target.
+pub(super) fn next_mode(
+    (mode, mu, target): (Mode, f64, f64),
+    p: [f64; 2],
+    u: [f64; 2],
+    scale: f64,
+    tol_speed: f64,
+) -> Mode {
+    let [p_n, p_t] = p;
+    match mode {
+        Mode::Off if u[0] < target - tol_speed => {
+            if mu > 0.0 {
+                Mode::Stick
+            } else {
+                Mode::Slide(0.0)
+            }
+        }
+        Mode::Stick | Mode::Slide(_) if p_n < -SLACK * scale => Mode::Off,
+        Mode::Stick if p_t.abs() > mu * p_n * (1.0 + SLACK) + SLACK * scale => {
+            Mode::Slide(p_t.signum())
+        }
+        Mode::Slide(sign) if sign * u[1] > tol_speed => Mode::Stick,
+        mode => mode,
+    }
+}
+
+/// The passes' pivoting: block pivoting (every broken contact mended at once) while the
+/// number broken falls; then one at a time, the last broken (Murty's rule, which cannot
+/// cycle on a frictionless floor, where the regularised matrix is positive definite).
+#[derive(Default)]
+pub(super) struct Pivots {
+    fewest: Option<usize>,
+    stale: u32,
+    /// The modes of each single-pivot pass since the fewest broken last fell: met again,
+    /// the passes are in a cycle that would run to MAX_PASSES (each pass repeats the one
+    /// after its first visit).
+    visited: Vec<Vec<Mode>>,
+}
+
+impl Pivots {
+    /// Mends `broken` (each contact's index and its new mode) in `modes`, all at once or the
+    /// last one alone; `false` where the passes are in a cycle (nothing is changed then).
+    pub(super) fn pivot(&mut self, modes: &mut [Mode], mut broken: Vec<(usize, Mode)>) -> bool {
+        if self.fewest.is_none_or(|f| broken.len() < f) {
+            (self.fewest, self.stale) = (Some(broken.len()), 0);
+            self.visited.clear();
+        } else {
+            self.stale += 1;
+        }
+        if self.stale >= STALE_PASSES {
+            if self.visited.iter().any(|v| v == modes) {
+                return false;
+            }
+            self.visited.push(modes.to_vec());
+            broken.drain(..broken.len() - 1);
+        }
+        for (i, mode) in broken {
+            modes[i] = mode;
+        }
+        true
+    }
+}
+
 /// Solves the stage's velocity, from `s.free` into `s.v`, and the candidates' impulses; its
-/// iterations are its passes. `None` if the modes did not settle (nothing is kept then).
+/// iterations are its passes. `None` if the modes did not settle (nothing is kept then), or
+/// where a contact joins two bodies: its rows would break the band.
 pub(super) fn solve(
     chain: &mut ExactChain,
     s: &mut Scratch,
 ) -> Result<Option<StepReport>, StepError> {
-    let Some(floor) = chain.floor else {
+    if s.candidates.iter().any(|c| c.other.is_some()) {
         return Ok(None);
-    };
+    }
     let tol_speed = position_tolerance(chain) / s.h;
     s.base.clone_from(&s.free);
     // The joints held with no contact: what the contacts' impulses act from.
@@ -64,18 +152,14 @@ pub(super) fn solve(
         rows::apply(s);
         s.held.clone_from(&s.v);
     }
-    let mut set = ActiveSet::new(floor, s);
-    let (mut fewest, mut stale) = (usize::MAX, 0);
-    // The modes of each single-pivot pass since the fewest broken last fell: met again,
-    // the passes are in a cycle that would run to MAX_PASSES (each pass repeats the one
-    // after its first visit), so the stage goes to Gauss-Seidel at once.
-    let mut visited: Vec<Vec<Mode>> = Vec::new();
+    let mut set = ActiveSet::new(s);
+    let mut pivots = Pivots::default();
     for pass in 1..=MAX_PASSES {
         set.rows(s);
         rows::build(chain, s, Stage::Impulses, &set.extra);
         rows::solve(chain, s)?;
         rows::apply(s);
-        let mut broken = set.broken(s, tol_speed);
+        let broken = set.broken(s, tol_speed);
         if broken.is_empty() {
             set.keep(s);
             return Ok(Some(StepReport {
@@ -84,24 +168,8 @@ pub(super) fn solve(
                 ..StepReport::default()
             }));
         }
-        // Block pivoting (every broken contact mended at once) while the number broken
-        // falls; then one at a time, the last broken (Murty's rule, which cannot cycle on
-        // a frictionless floor, where the regularised matrix is positive definite).
-        if broken.len() < fewest {
-            (fewest, stale) = (broken.len(), 0);
-            visited.clear();
-        } else {
-            stale += 1;
-        }
-        if stale >= STALE_PASSES {
-            if visited.contains(&set.modes) {
-                return Ok(None);
-            }
-            visited.push(set.modes.clone());
-            broken.drain(..broken.len() - 1);
-        }
-        for (i, mode) in broken {
-            set.modes[i] = mode;
+        if !pivots.pivot(&mut set.modes, broken) {
+            return Ok(None);
         }
     }
     Ok(None)
@@ -109,7 +177,6 @@ pub(super) fn solve(
 
 /// The candidates' modes, and the rows they give.
 struct ActiveSet {
-    floor: Floor,
     modes: Vec<Mode>,
     /// Each candidate's first row among `extra`, if it has one.
     first: Vec<Option<usize>>,
@@ -118,26 +185,9 @@ struct ActiveSet {
 
 impl ActiveSet {
     /// The modes the candidates' last impulses (`s.candidates`) suggest.
-    fn new(floor: Floor, s: &Scratch) -> Self {
-        let mu = floor.friction;
-        let modes = s
-            .candidates
-            .iter()
-            .map(|c| {
-                if c.normal <= 0.0 {
-                    Mode::Off
-                } else if mu > 0.0 && c.tangent.abs() < mu * c.normal * (1.0 - SLACK) {
-                    Mode::Stick
-                } else if mu > 0.0 {
-                    Mode::Slide(c.tangent.signum())
-                } else {
-                    Mode::Slide(0.0)
-                }
-            })
-            .collect();
+    fn new(s: &Scratch) -> Self {
         Self {
-            floor,
-            modes,
+            modes: first_modes(&s.candidates),
             first: vec![None; s.candidates.len()],
             extra: Vec::new(),
         }
@@ -145,11 +195,11 @@ impl ActiveSet {
 
     /// The rows of the contacts that are on, in the candidates' order (their bodies').
     fn rows(&mut self, s: &Scratch) {
-        let (n, t, mu) = (self.floor.normal, self.floor.tangent(), self.floor.friction);
         self.extra.clear();
         for ((c, mode), first) in s.candidates.iter().zip(&self.modes).zip(&mut self.first) {
             let w = s.inv[c.body];
-            let (dn, dt) = (along(n, c.arm), along(t, c.arm));
+            let mu = c.mu;
+            let (dn, dt) = (c.row(c.n).0, c.row(c.t()).0);
             let row = |k: [f64; 3], d: [f64; 3], target: f64| Row {
                 rhs: target - dot3(k, s.base[c.body]),
                 reg: REGULARISATION * weighted(k, w, k),
@@ -176,35 +226,25 @@ impl ActiveSet {
         match self.modes[i] {
             Mode::Off => (0.0, 0.0),
             Mode::Stick => (x(e), x(e + 1)),
-            Mode::Slide(sign) => (x(e), sign * self.floor.friction * x(e)),
+            Mode::Slide(sign) => (x(e), sign * s.candidates[i].mu * x(e)),
         }
     }
 
     /// The contacts the last solve breaks a condition of, each with the mode that mends it.
     fn broken(&self, s: &Scratch, tol_speed: f64) -> Vec<(usize, Mode)> {
-        let (n, t, mu) = (self.floor.normal, self.floor.tangent(), self.floor.friction);
         let scale = (0..self.modes.len())
             .map(|i| self.impulse(s, i).0.abs())
             .fold(0.0, f64::max);
         let mut broken = Vec::new();
         for (i, c) in s.candidates.iter().enumerate() {
-            let v = s.v[c.body];
             let (p_n, p_t) = self.impulse(s, i);
-            let next = match self.modes[i] {
-                Mode::Off if dot3(along(n, c.arm), v) < c.target - tol_speed => {
-                    if mu > 0.0 {
-                        Mode::Stick
-                    } else {
-                        Mode::Slide(0.0)
-                    }
-                }
-                Mode::Stick | Mode::Slide(_) if p_n < -SLACK * scale => Mode::Off,
-                Mode::Stick if p_t.abs() > mu * p_n * (1.0 + SLACK) + SLACK * scale => {
-                    Mode::Slide(p_t.signum())
-                }
-                Mode::Slide(sign) if sign * dot3(along(t, c.arm), v) > tol_speed => Mode::Stick,
-                mode => mode,
-            };
+            let next = next_mode(
+                (self.modes[i], c.mu, c.target),
+                [p_n, p_t],
+                c.speeds(&s.v),
+                scale,
+                tol_speed,
+            );
             if next != self.modes[i] {
                 broken.push((i, next));
             }

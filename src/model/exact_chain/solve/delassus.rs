@@ -1,8 +1,10 @@
-//! The impulses of a stage with fewer than `super::active::FROM_CONTACTS` contact points, or
-//! where the active set (`super::active`) did not settle: the joints
-//! held by a direct solve, the floor's contacts solved against the exact chain's response by
-//! projected Gauss-Seidel on their Delassus matrix (Baraff 1996, section 8: the contacts as
-//! `k` auxiliary constraints at `O(k N)`).
+//! The impulses of a stage with fewer than `super::active::FROM_CONTACTS` contact points,
+//! with a contact between two bodies, or where the active set (`super::active`) did not
+//! settle: the joints held by a direct solve, the contacts solved against the exact chain's
+//! response by projected Gauss-Seidel on their Delassus matrix (Baraff 1996, section 8: the
+//! contacts as `k` auxiliary constraints at `O(k N)`). A contact between two bodies far apart
+//! along the chain would break the joints' band; as an auxiliary constraint it costs what a
+//! floor's contact costs.
 //!
 //! The joints' rows alone are factorised once. A contact direction's response, the chain's
 //! velocity change from a unit impulse along it with the joints held, is one more solve of
@@ -16,7 +18,7 @@
 //! impulses applied.
 
 use super::super::{ExactChain, StepError, StepReport};
-use super::rows::{self, along, dot3};
+use super::rows::{self, dot3};
 use super::{Scratch, position_tolerance};
 
 /// The contacts are solved when a sweep moves none of their velocities by more than this
@@ -28,33 +30,63 @@ pub(super) const SPEED_TOLERANCE: f64 = 1e-6;
 /// The most Gauss-Seidel sweeps a stage may take.
 const MAX_SWEEPS: u32 = 1000;
 
+/// One direction a contact pushes along: its Jacobian on a body, and on a second body that
+/// takes it reversed, if any. It is also the impulse's direction (`k = d`).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Dir {
+    pub(super) body: usize,
+    pub(super) d: [f64; 3],
+    pub(super) other: Option<(usize, [f64; 3])>,
+}
+
+impl Dir {
+    /// The velocity along it at `v` (m/s).
+    pub(super) fn speed(&self, v: &[[f64; 3]]) -> f64 {
+        dot3(self.d, v[self.body]) + self.other.map_or(0.0, |(o, d)| dot3(d, v[o]))
+    }
+
+    /// Its parts: each body and its Jacobian.
+    fn parts(&self) -> impl Iterator<Item = (usize, [f64; 3])> {
+        std::iter::once((self.body, self.d)).chain(self.other)
+    }
+}
+
+/// The normal and tangent directions of the `engaged` candidates, two each, in order.
+pub(super) fn directions(s: &Scratch, engaged: &[usize]) -> Vec<Dir> {
+    engaged
+        .iter()
+        .flat_map(|&c| {
+            let c = &s.candidates[c];
+            [c.n, c.t()].map(|dir| {
+                let (k, k_other) = c.row(dir);
+                Dir {
+                    body: c.body,
+                    d: k,
+                    other: c.other.map(|o| (o, k_other)),
+                }
+            })
+        })
+        .collect()
+}
+
 /// Solves the stage's velocity, from `s.free` into `s.v` (see the module's doc). Its
 /// iterations are its sweeps; it has converged when a sweep moved no contact's velocity by
 /// more than the tolerance ([`SPEED_TOLERANCE`]).
 pub(super) fn solve(chain: &mut ExactChain, s: &mut Scratch) -> Result<StepReport, StepError> {
     let tol_speed = position_tolerance(chain) / s.h;
-    s.base.clone_from(&s.free);
-    let held = !(chain.joints.is_empty() && chain.pin.is_none());
-    if held {
-        rows::solve_held(chain, s)?;
-        rows::apply(s);
-    } else {
-        s.rows.clear();
-        s.v.clone_from(&s.base);
-    }
-    let floor = chain.floor;
-    let Some(floor) = floor.filter(|_| !s.candidates.is_empty()) else {
+    let held = hold(chain, s)?;
+    if s.candidates.is_empty() {
         return Ok(StepReport {
             iterations: 1,
             converged: true,
             ..StepReport::default()
         });
-    };
+    }
     let held_v = s.v.clone();
     s.held.clone_from(&held_v);
     let speed = |s: &Scratch, c: usize, v: &[[f64; 3]]| {
         let c = &s.candidates[c];
-        dot3(along(floor.normal, c.arm), v[c.body])
+        c.speed(c.n, v)
     };
     let mut engaged: Vec<usize> = (0..s.candidates.len())
         .filter(|&c| {
@@ -69,19 +101,26 @@ pub(super) fn solve(chain: &mut ExactChain, s: &mut Scratch) -> Result<StepRepor
             .iter()
             .flat_map(|&c| [s.candidates[c].normal.max(0.0), s.candidates[c].tangent])
             .collect();
+        let dirs = directions(s, &engaged);
         if !engaged.is_empty() {
-            let (w, u0) = delassus(chain, s, &engaged, &held_v);
+            let w = matrix(chain, s, &dirs);
+            let u0: Vec<f64> = dirs.iter().map(|d| d.speed(&held_v)).collect();
             // The contacts' velocities to the position tolerance over the step, or to
             // SPEED_TOLERANCE of the fastest of them, whichever is wider.
             let scale = u0.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
             let tol = tol_speed.max(SPEED_TOLERANCE * scale);
-            let (sweeps, converged) = gauss_seidel(chain, s, &engaged, &w, &u0, &mut p, tol);
+            let (sweeps, converged) = gauss_seidel(s, &engaged, &w, &u0, &mut p, tol);
             report.iterations += sweeps;
             report.converged = converged;
         } else {
             report.converged = true;
         }
-        apply_contacts(chain, s, &engaged, &p, &held_v, held)?;
+        let mut v = std::mem::take(&mut s.v);
+        v.clear();
+        v.extend_from_slice(&held_v);
+        let responded = respond(chain, s, &dirs, &p, held, &mut v);
+        s.v = v;
+        responded?;
         let late: Vec<usize> = (0..s.candidates.len())
             .filter(|c| !engaged.contains(c))
             .filter(|&c| speed(s, c, &s.v) < s.candidates[c].target - tol_speed)
@@ -102,38 +141,49 @@ pub(super) fn solve(chain: &mut ExactChain, s: &mut Scratch) -> Result<StepRepor
     Ok(report)
 }
 
-/// The velocity `s.v` from `held` (the joints held, no contact) and the contacts' impulses
-/// `p` of the `engaged` candidates, the joints held against them: one more solve.
-fn apply_contacts(
+/// The stage's velocity with the joints held and no contact, from `s.free` into `s.v` (the
+/// joints' rows factorised in `chain.system`); whether there are joints or a pin to hold.
+pub(super) fn hold(chain: &mut ExactChain, s: &mut Scratch) -> Result<bool, StepError> {
+    s.base.clone_from(&s.free);
+    let held = !(chain.joints.is_empty() && chain.pin.is_none());
+    if held {
+        rows::solve_held(chain, s)?;
+        rows::apply(s);
+    } else {
+        s.rows.clear();
+        s.v.clone_from(&s.base);
+    }
+    Ok(held)
+}
+
+/// Adds to `v` the velocity (or, for a move, the displacement) the impulses `p` along `dirs`
+/// give, the rows of `s.rows` (factorised in `chain.system`) held against them where `held`:
+/// their own kick, and one more solve for the rows' answer to it.
+pub(super) fn respond(
     chain: &ExactChain,
-    s: &mut Scratch,
-    engaged: &[usize],
+    s: &Scratch,
+    dirs: &[Dir],
     p: &[f64],
-    held: &[[f64; 3]],
-    joints: bool,
+    held: bool,
+    v: &mut [[f64; 3]],
 ) -> Result<(), StepError> {
-    let floor = chain.floor.expect("contacts need a floor");
-    // The contacts' impulses alone, as a velocity change of each body.
+    // The impulses alone, as a velocity change of each body.
     let mut kick = vec![[0.0; 3]; chain.bodies.len()];
-    for (i, &c) in engaged.iter().enumerate() {
-        let c = &s.candidates[c];
-        let w = s.inv[c.body];
-        for (dir, impulse) in [(floor.normal, p[2 * i]), (floor.tangent(), p[2 * i + 1])] {
-            let d = along(dir, c.arm);
+    for (dir, &impulse) in dirs.iter().zip(p) {
+        for (b, d) in dir.parts() {
+            let w = s.inv[b];
             for k in 0..3 {
-                kick[c.body][k] += w[k] * d[k] * impulse;
+                kick[b][k] += w[k] * d[k] * impulse;
             }
         }
     }
-    s.v.clear();
-    s.v.extend_from_slice(held);
-    for (v, k) in s.v.iter_mut().zip(&kick) {
+    for (v, k) in v.iter_mut().zip(&kick) {
         for a in 0..3 {
             v[a] += k[a];
         }
     }
-    if joints {
-        // The joints' answer to the kick: rows' right-hand sides `-k M^-1 C^T p`.
+    if held && !s.rows.is_empty() {
+        // The rows' answer to the kick: right-hand sides `-k M^-1 C^T p`.
         let mut y: Vec<f64> = s
             .rows
             .iter()
@@ -149,84 +199,133 @@ fn apply_contacts(
                 let (b, d) = (r.body[a], r.d[a]);
                 let w = s.inv[b];
                 for k in 0..3 {
-                    s.v[b][k] += w[k] * d[k] * x;
+                    v[b][k] += w[k] * d[k] * x;
                 }
             }
         }
     }
-    if s.v.iter().flatten().all(|x| x.is_finite()) {
+    if v.iter().flatten().all(|x| x.is_finite()) {
         Ok(())
     } else {
         Err(StepError::NonFinite)
     }
 }
 
-/// The Delassus matrix of the `engaged` candidates (row-major, `2k` square: each contact's
-/// normal then tangent) and their velocities with the joints held and no contact, `u0`.
-/// Each column is one solve of the joints' factorised system (`chain.system`).
-fn delassus(
+/// The Delassus matrix of `dirs` (row-major, square): the velocity along each direction from
+/// a unit impulse along each, the rows of `s.rows` (factorised in `chain.system`) held.
+/// Each column is one solve of that system. A direction the rows hold all but still (a
+/// point the pin holds, say) answers an impulse with rounding alone: its row and column are
+/// zero, and it takes none.
+pub(super) fn matrix(chain: &ExactChain, s: &Scratch, dirs: &[Dir]) -> Vec<f64> {
+    let m = dirs.len();
+    let all: Vec<usize> = (0..m).collect();
+    let columns = columns(chain, s, dirs, &all);
+    let mut w = vec![0.0; m * m];
+    for (col, column) in columns.iter().enumerate() {
+        for (row, &x) in column.iter().enumerate() {
+            w[row * m + col] = x;
+        }
+    }
+    for (i, dir) in dirs.iter().enumerate() {
+        if held_still(s, dir, w[i * m + i]) {
+            for j in 0..m {
+                w[i * m + j] = 0.0;
+                w[j * m + i] = 0.0;
+            }
+        }
+    }
+    w
+}
+
+/// Whether `dir`, whose response with the rows held is `w_ii`, is held still by them
+/// ([`HELD`]).
+pub(super) fn held_still(s: &Scratch, dir: &Dir, w_ii: f64) -> bool {
+    let free: f64 = dir
+        .parts()
+        .map(|(b, d)| rows::weighted(d, s.inv[b], d))
+        .sum();
+    w_ii <= HELD * free
+}
+
+/// The columns `which` of the Delassus matrix of `dirs` (see [`matrix`]), each the
+/// velocity along every direction from a unit impulse along one: one solve each.
+pub(super) fn columns(
     chain: &ExactChain,
     s: &Scratch,
-    engaged: &[usize],
-    held: &[[f64; 3]],
-) -> (Vec<f64>, Vec<f64>) {
-    let floor = chain.floor.expect("candidates need a floor");
-    let dirs: Vec<(usize, [f64; 3])> = engaged
-        .iter()
-        .flat_map(|&c| {
-            let c = &s.candidates[c];
-            [floor.normal, floor.tangent()].map(|dir| (c.body, along(dir, c.arm)))
-        })
-        .collect();
-    let m = dirs.len();
-    let mut w = vec![0.0; m * m];
-    // The rows on each engaged body (the pin's, its two joints'): a unit impulse on a body
-    // enters the system there, and the joints' answer reaches a body there.
+    dirs: &[Dir],
+    which: &[usize],
+) -> Vec<Vec<f64>> {
+    // The rows on each body a direction touches (the pin's, its two joints', a projection's
+    // points): a unit impulse on a body enters the system there, and the rows' answer
+    // reaches a body there.
     let mut touching: Vec<Vec<(usize, usize)>> = vec![Vec::new(); chain.bodies.len()];
-    for &(b, _) in &dirs {
-        if touching[b].is_empty() {
-            for (i, r) in s.rows.iter().enumerate() {
-                for a in 0..r.count {
-                    if r.body[a] == b {
-                        touching[b].push((i, a));
+    let mut listed = vec![false; chain.bodies.len()];
+    for dir in dirs {
+        for (b, _) in dir.parts() {
+            if !listed[b] {
+                listed[b] = true;
+                for (i, r) in s.rows.iter().enumerate() {
+                    for a in 0..r.count {
+                        if r.body[a] == b {
+                            touching[b].push((i, a));
+                        }
                     }
                 }
             }
         }
     }
+    let mut bodies: Vec<usize> = dirs.iter().flat_map(|d| d.parts().map(|p| p.0)).collect();
+    bodies.sort_unstable();
+    bodies.dedup();
     let mut y = vec![0.0; s.rows.len()];
-    for (col, &(body, d)) in dirs.iter().enumerate() {
-        let inv = s.inv[body];
-        let own = [inv[0] * d[0], inv[1] * d[1], inv[2] * d[2]];
+    let mut dv = vec![[0.0; 3]; chain.bodies.len()];
+    let mut out = Vec::with_capacity(which.len());
+    for &col in which {
+        let dir = &dirs[col];
         y.fill(0.0);
-        for &(i, a) in &touching[body] {
-            y[i] = -dot3(s.rows[i].k[a], own);
+        for (b, d) in dir.parts() {
+            let inv = s.inv[b];
+            let own = [inv[0] * d[0], inv[1] * d[1], inv[2] * d[2]];
+            for &(i, a) in &touching[b] {
+                y[i] -= dot3(s.rows[i].k[a], own);
+            }
         }
         if !s.rows.is_empty() {
             chain.system.solve(&mut y);
         }
-        // The response at each contact's body: its own kick, and the joints' impulses on it.
-        for (row, &(b, dr)) in dirs.iter().enumerate() {
-            let mut dv = if b == body { own } else { [0.0; 3] };
+        // The response at each direction's bodies: the impulse's own kick, and the rows'
+        // impulses on them.
+        for &b in &bodies {
+            dv[b] = [0.0; 3];
+        }
+        for (b, d) in dir.parts() {
+            let inv = s.inv[b];
+            for k in 0..3 {
+                dv[b][k] += inv[k] * d[k];
+            }
+        }
+        for &b in &bodies {
             let wb = s.inv[b];
             for &(i, a) in &touching[b] {
                 let dri = s.rows[i].d[a];
                 for k in 0..3 {
-                    dv[k] += wb[k] * dri[k] * y[i];
+                    dv[b][k] += wb[k] * dri[k] * y[i];
                 }
             }
-            w[row * m + col] = dot3(dr, dv);
         }
+        out.push(dirs.iter().map(|r| r.speed(&dv)).collect());
     }
-    let u0 = dirs.iter().map(|&(b, d)| dot3(d, held[b])).collect();
-    (w, u0)
+    out
 }
+
+/// A direction whose response with the rows held is below this fraction of its response
+/// free is held still by them (see [`matrix`]).
+const HELD: f64 = 1e-9;
 
 /// Projected Gauss-Seidel on `w p + u0` for the `engaged` candidates: each contact's normal
 /// impulse `>= 0` against its target, then its friction within `mu` times it. Returns the
 /// sweeps taken and whether the last moved no contact's velocity by more than `tol_speed`.
 fn gauss_seidel(
-    chain: &ExactChain,
     s: &Scratch,
     engaged: &[usize],
     w: &[f64],
@@ -234,7 +333,6 @@ fn gauss_seidel(
     p: &mut [f64],
     tol_speed: f64,
 ) -> (u32, bool) {
-    let mu = chain.floor.map_or(0.0, |f| f.friction);
     let m = u0.len();
     let mut u: Vec<f64> = (0..m)
         .map(|r| u0[r] + (0..m).map(|c| w[r * m + c] * p[c]).sum::<f64>())
@@ -255,7 +353,7 @@ fn gauss_seidel(
     for sweep in 1..=MAX_SWEEPS {
         let mut moved: f64 = 0.0;
         for (i, &c) in engaged.iter().enumerate() {
-            let target = s.candidates[c].target;
+            let (target, mu) = (s.candidates[c].target, s.candidates[c].mu);
             let (n, t) = (2 * i, 2 * i + 1);
             if w[n * m + n] > 0.0 {
                 let normal = (p[n] - (u[n] - target) / w[n * m + n]).max(0.0);
@@ -272,4 +370,93 @@ fn gauss_seidel(
         }
     }
     (MAX_SWEEPS, false)
+}
+
+/// The least pushes `p >= 0` apart along two bodies' contacts, `w` their Delassus matrix
+/// (row-major, square), that move each by `rhs` (m), or leave it further apart: every push
+/// solved for at once, those that come out pulling let go and the rest solved again (a few
+/// contacts, a pass or two). Redundant contacts share their push (the regularisation).
+pub(super) fn push_apart(w: &[f64], rhs: &[f64]) -> Vec<f64> {
+    let m = rhs.len();
+    let mut on: Vec<bool> = (0..m).map(|j| w[j * m + j] > 0.0).collect();
+    let mut p = vec![0.0; m];
+    for _ in 0..=m {
+        let idx: Vec<usize> = (0..m).filter(|&j| on[j]).collect();
+        let n = idx.len();
+        let mut a = vec![0.0; n * n];
+        let mut b: Vec<f64> = idx.iter().map(|&j| rhs[j]).collect();
+        for (r, &i) in idx.iter().enumerate() {
+            for (c, &j) in idx.iter().enumerate() {
+                a[r * n + c] = w[i * m + j];
+            }
+            a[r * n + r] += super::super::REGULARISATION * w[i * m + i];
+        }
+        p.fill(0.0);
+        let Some(x) = lu_solve(&mut a, &mut b, n) else {
+            return p;
+        };
+        for (&j, &x) in idx.iter().zip(&x) {
+            p[j] = x;
+        }
+        let pulling: Vec<usize> = idx.iter().copied().filter(|&j| p[j] < 0.0).collect();
+        if pulling.is_empty() {
+            return p;
+        }
+        for j in pulling {
+            on[j] = false;
+        }
+    }
+    p.iter_mut().for_each(|x| *x = x.max(0.0));
+    p
+}
+
+/// Solves `a x = b` (`a` row-major, `n` square) by Gaussian elimination with partial
+/// pivoting, in place; `None` where a pivot vanishes.
+pub(super) fn lu_solve(a: &mut [f64], b: &mut [f64], n: usize) -> Option<Vec<f64>> {
+    let largest = a.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    for k in 0..n {
+        let pivot = (k..n).max_by(|&i, &j| a[i * n + k].abs().total_cmp(&a[j * n + k].abs()))?;
+        if a[pivot * n + k].abs() <= 1e-14 * largest || !a[pivot * n + k].is_finite() {
+            return None;
+        }
+        if pivot != k {
+            for c in 0..n {
+                a.swap(k * n + c, pivot * n + c);
+            }
+            b.swap(k, pivot);
+        }
+        for i in k + 1..n {
+            let f = a[i * n + k] / a[k * n + k];
+            if f != 0.0 {
+                for c in k..n {
+                    a[i * n + c] -= f * a[k * n + c];
+                }
+                b[i] -= f * b[k];
+            }
+        }
+    }
+    let mut x = vec![0.0; n];
+    for k in (0..n).rev() {
+        let sum: f64 = (k + 1..n).map(|c| a[k * n + c] * x[c]).sum();
+        x[k] = (b[k] - sum) / a[k * n + k];
+    }
+    Some(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::lu_solve;
+
+    #[test]
+    fn gaussian_elimination_solves_a_system_that_needs_a_row_swap() {
+        // [0 2; 3 1] x = [4; 5]: x = (1, 2); the first pivot is zero.
+        let (mut a, mut b) = (vec![0.0, 2.0, 3.0, 1.0], vec![4.0, 5.0]);
+        let x = lu_solve(&mut a, &mut b, 2).expect("regular");
+        assert!(
+            (x[0] - 1.0).abs() < 1e-15 && (x[1] - 2.0).abs() < 1e-15,
+            "{x:?}"
+        );
+        let (mut a, mut b) = (vec![1.0, 2.0, 2.0, 4.0], vec![1.0, 2.0]);
+        assert!(lu_solve(&mut a, &mut b, 2).is_none(), "singular");
+    }
 }

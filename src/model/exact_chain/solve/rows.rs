@@ -31,11 +31,14 @@ pub(super) struct Row {
 pub(super) struct Pose {
     centre: Vec<[f64; 2]>,
     turn: Vec<[f64; 2]>,
+    /// How many times it was taken: what was measured at it is known by this.
+    pub(super) generation: u64,
 }
 
 impl Pose {
     /// The bodies' poses, each moved by `h` times its velocity in `v` (if given).
     pub(super) fn take(&mut self, chain: &ExactChain, v: Option<(&[[f64; 3]], f64)>) {
+        self.generation += 1;
         self.centre.clear();
         self.turn.clear();
         for (i, b) in chain.bodies.iter().enumerate() {
@@ -45,6 +48,11 @@ impl Pose {
             let (sin, cos) = (b.angle_rad + h * dv[2]).sin_cos();
             self.turn.push([cos, sin]);
         }
+    }
+
+    /// `body`'s centre of mass (world, m).
+    pub(super) fn centre(&self, body: usize) -> [f64; 2] {
+        self.centre[body]
     }
 
     /// The world offset of `local` on `body`.
@@ -159,18 +167,17 @@ pub(super) fn build(chain: &ExactChain, s: &mut Scratch, stage: Stage, extra: &[
     }
 }
 
-/// The rows that move the bodies (no velocity) onto the joints and out of the floor at
-/// `s.start_pose`: each joint's and the pin's gap, and each point of `deep` (body, point in
-/// its axes, the height it is to be at) its distance from that height; `x` is then the
-/// move's multipliers.
+/// The rows that move the bodies (no velocity) onto the joints and out of the floor and the
+/// laid tape at `s.start_pose`: each joint's and the pin's gap, and each row of `deep` (body,
+/// the Jacobian of its point along its normal, how far short of its place it is), by body;
+/// `x` is then the move's multipliers.
 pub(super) fn build_projection(
     chain: &ExactChain,
     s: &mut Scratch,
-    deep: &[(usize, [f64; 2], f64)],
+    deep: &[(usize, [f64; 3], f64)],
 ) {
     s.rows.clear();
     s.sizes.clear();
-    let floor = chain.floor;
     let mut next = 0;
     let axes = [[1.0, 0.0], [0.0, 1.0]];
     for i in 0..chain.bodies.len() {
@@ -189,11 +196,9 @@ pub(super) fn build_projection(
             }
         }
         while next < deep.len() && deep[next].0 == i {
-            let floor = floor.expect("a point below the floor needs a floor");
-            let a = s.start_pose.arm(i, deep[next].1);
-            let dn = along(floor.normal, a);
+            let dn = deep[next].1;
             let mut row = one(i, dn, dn);
-            row.rhs = deep[next].2 - floor.gap(s.start_pose.point(i, deep[next].1));
+            row.rhs = deep[next].2;
             row.reg = REGULARISATION * weighted(dn, s.inv[i], dn);
             s.rows.push(row);
             next += 1;

@@ -140,7 +140,7 @@ impl ExactBench {
             &floor,
             Vector::new(0.0, -g),
             dt,
-            Some(report.gravity_work_j),
+            (Some(report.gravity_work_j), 0.0),
         );
         self.booked.normal_j += w.normal_j;
         self.booked.friction_j += w.friction_j;
