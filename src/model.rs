@@ -62,6 +62,12 @@ pub enum BangEnd {
     Cap,
 }
 
+/// The largest stand-off of the released coil's chords from their arcs, in thicknesses, at
+/// which the bang's layers meet: beyond it the polygon's own turns overlap by more than the
+/// overlap guard's bound (half the thickness) before anything moves, so the thickness is
+/// not resolved, and the layers are left out, the summary saying so.
+pub const LAYERS_RESOLVED_PER_THICKNESS: f64 = 0.5;
+
 /// The final bang as measured so far.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct BangRecord {
@@ -82,6 +88,13 @@ pub struct BangRecord {
     pub end: Option<BangEnd>,
     /// How the exact chain solved the bang's steps (all zero on the engine's).
     pub solve: exact_chain::SolveStats,
+    /// How far the released coil's links stand off the arcs they stand for (m): a chord of
+    /// length `l` turning by the link angle `phi` is `l phi / 8` inside its arc at its middle,
+    /// where the next turn's polygon can reach it. The tape's layers are resolved, and meet,
+    /// only where this is below half the thickness ([`LAYERS_RESOLVED_PER_THICKNESS`]).
+    pub chord_sag_m: f64,
+    /// Whether the bang's layers meet each other (see `chord_sag_m`).
+    pub layers: bool,
     /// The ratio the handover scaled every speed by for the pieces' thickness, keeping the
     /// energy the unroll brought (see `Model::join_pieces`); 0 before the release.
     pub thickness_speed_ratio: f64,

@@ -184,11 +184,38 @@ fn the_yoga_mat_s_bang_on_the_exact_chain_comes_to_rest_with_its_joints_closed()
         "the contacts took {:.2} %",
         100.0 * contacts
     );
-    let solve = report.bang.unwrap().solve;
+    let bang = report.bang.unwrap();
+    let b = scene.tape.thickness_m;
+    assert!(bang.layers, "the yoga mat's layers were left out: {bang:?}");
+    assert!(bang.chord_sag_m < 0.5 * b, "{bang:?}");
+    let solve = bang.solve;
     assert!(solve.steps > 0, "the exact chain took no step");
     assert!(
         solve.max_joint_gap_m < 1e-9,
         "a joint was left {:.2e} m open",
         solve.max_joint_gap_m
+    );
+}
+
+#[test]
+fn a_spool_whose_links_cannot_resolve_its_thickness_runs_its_bang_without_layers_and_says_so() {
+    // The spool's tape is 2 um thick on a 2 cm core, its links 3.9 mm: each chord stands
+    // l phi / 8 = 59 b inside its arc, so the coil's polygon overlaps its next turn by far
+    // more than the overlap guard's bound before anything moves. The bang runs without
+    // layers, to rest, and the report and the summary say so; with layers the guard would
+    // stop it.
+    let scene = shipped("spool");
+    let (_, report) = run_kept(&scene);
+    assert_eq!(report.stop.status(), Status::Completed, "{}", report.stop);
+    let bang = report.bang.as_ref().unwrap();
+    let b = scene.tape.thickness_m;
+    assert!(!bang.layers, "{bang:?}");
+    assert!(bang.chord_sag_m > 0.5 * b, "{bang:?}");
+    let l = &report.ledger.bang;
+    assert_eq!((l.layers_normal_j, l.layers_friction_j), (0.0, 0.0));
+    let summary = uncoil::output::summary::summary(&report, std::path::Path::new("runs/spool"));
+    assert!(
+        summary.contains("The tape's layers did not meet in the bang"),
+        "{summary}"
     );
 }

@@ -147,6 +147,13 @@ impl Model {
                 }
             }
         }
+        let longest = self.chain.links[self.coil.first_attached..]
+            .iter()
+            .map(|l| l.length_m)
+            .fold(0.0, f64::max);
+        self.bang.chord_sag_m = longest * self.settings.link_angle / 8.0;
+        self.bang.layers =
+            self.bang.chord_sag_m < LAYERS_RESOLVED_PER_THICKNESS * 2.0 * self.settings.half_b;
         for k in self.coil.first_attached..self.chain.len() {
             let piece = self.spawn_piece(k, k, coil);
             self.join_near_node(piece);

@@ -314,15 +314,27 @@ fn health_summary(o: &mut String, report: &RunReport) {
         report.max_penetration_m,
         report.bounds.penetration_m
     );
-    if report.bang.is_some() {
+    if let Some(bang) = &report.bang {
         let b = report.scene.tape.thickness_m;
-        let _ = writeln!(
-            o,
-            "Deepest overlap of the tape's layers in the bang {:.2e} m ({:.3} % of b; bound {:.2e} m).",
-            report.max_overlap_m,
-            100.0 * report.max_overlap_m / b,
-            report.bounds.overlap_m
-        );
+        if bang.layers {
+            let _ = writeln!(
+                o,
+                "Deepest overlap of the tape's layers in the bang {:.2e} m ({:.3} % of b; bound {:.2e} m).",
+                report.max_overlap_m,
+                100.0 * report.max_overlap_m / b,
+                report.bounds.overlap_m
+            );
+        } else {
+            let _ = writeln!(
+                o,
+                "The tape's layers did not meet in the bang, which may pass through itself: the \
+                 released coil's links stand {:.2e} m ({:.0} b) off their arcs, more than {} b, so \
+                 its turns overlap before anything moves; more links a turn resolve it.",
+                bang.chord_sag_m,
+                bang.chord_sag_m / b,
+                crate::model::LAYERS_RESOLVED_PER_THICKNESS
+            );
+        }
     }
     let _ = writeln!(
         o,

@@ -149,6 +149,14 @@ pub struct BangReport {
     /// How the exact chain solved the bang's steps (all zero on the engine's).
     #[serde(default)]
     pub solve: SolveStats,
+    /// Whether the tape's layers met each other in the bang: only where the released coil's
+    /// chords stand off their arcs (`chord_sag_m`, m) by less than half the thickness.
+    #[serde(default)]
+    pub layers: bool,
+    /// How far the released coil's links stand off the arcs they stand for, `l phi / 8` for
+    /// a link of length `l` turning by the link angle `phi` (m).
+    #[serde(default)]
+    pub chord_sag_m: f64,
     /// The ratio the handover scaled every speed by at the release, for the pieces'
     /// thickness: the energy the unroll brought kept, the pieces turning with their own
     /// inertia `m b^2 / 12` more than their midlines'.

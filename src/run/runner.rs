@@ -400,6 +400,8 @@ impl<'s> Runner<'s> {
                 ended_by: last.bang.end,
                 solve: last.bang.solve,
                 thickness_speed_ratio: last.bang.thickness_speed_ratio,
+                layers: last.bang.layers,
+                chord_sag_m: last.bang.chord_sag_m,
             }),
             geo_hop_fraction: self.refs.exact.hop_onset_fraction(),
             max_joint_gap_m: self.max_gap,

@@ -237,7 +237,9 @@ impl Model {
         let mut floor = self.chain_floor();
         floor.point_m[1] -= self.settings.half_b;
         chain.set_floor(floor, &contact_points(&nodes, pin.is_some()));
-        chain.set_layers(self.layers(&nodes));
+        if self.bang.layers {
+            chain.set_layers(self.layers(&nodes));
+        }
         ExactBang {
             nodes,
             before: (Vec::new(), 0.0),
