@@ -45,7 +45,13 @@ fn yoga_mat_follows_the_exact_geometry_model_and_keeps_its_energy_for_the_bang()
     // No guard trips, and the rolling contact holds: the references apply until the last
     // turns (r < 3b, the exact model's hop), never through slip, bunching or skid.
     assert_eq!(report.stop.status(), uncoil::run::stop::Status::Completed);
-    for l in &report.reference_limits {
+    // The rigid coil's outer turn asking for more tension than a floppy tape has
+    // (`loosens`) is the references' own assumption, not the run's contact: it may come early.
+    for l in report
+        .reference_limits
+        .iter()
+        .filter(|l| l.kind != uncoil::run::limits::LimitKind::Loosens)
+    {
         assert!(
             matches!(
                 l.kind,

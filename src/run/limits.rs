@@ -47,6 +47,11 @@ pub enum LimitKind {
     /// The contact-line speed leaves the exact-geometry model's: the divergence of x' as
     /// r -> 0 is cut off here.
     LeavesExact,
+    /// The exact-geometry model's outer turn needs more tension at the coil's top than the
+    /// laid tape's pull gives (`ExactGeometry::loosen_onset_fraction`): from here on a tape
+    /// with no bending stiffness would lift off its coil, and the rigid coil stands for one
+    /// stiff enough to stay wound.
+    Loosens,
 }
 
 /// Where and why a reference stops applying.
@@ -79,6 +84,7 @@ pub struct Applicability {
     rolling: Option<ExactGeometry>,
     leave_steps: u32,
     hop_fraction: Option<f64>,
+    loosen_fraction: Option<f64>,
     slip_steps: u32,
     lift_off_steps: u32,
     mismatch_steps: u32,
@@ -100,6 +106,7 @@ impl Applicability {
             rolling: (!exact.is_sliding()).then(|| exact.clone()),
             leave_steps: 0,
             hop_fraction: exact.hop_onset_fraction(),
+            loosen_fraction: exact.loosen_onset_fraction(scene.floor.friction),
             slip_steps: 0,
             lift_off_steps: 0,
             mismatch_steps: 0,
@@ -194,6 +201,11 @@ impl Applicability {
         {
             self.note(LimitKind::ExactModelHops, obs, hop_detail(f));
         }
+        if let Some(f) = self.loosen_fraction
+            && obs.laid_fraction >= f
+        {
+            self.note(LimitKind::Loosens, obs, loosen_detail(f));
+        }
         if let Some(exact) = &self.rolling
             && obs.laid_fraction > 0.0
         {
@@ -241,6 +253,14 @@ impl Applicability {
                 detail: hop_detail(f),
             });
         }
+        if let (Some(f), false) = (self.loosen_fraction, self.seen(LimitKind::Loosens)) {
+            self.limits.push(ReferenceLimit {
+                kind: LimitKind::Loosens,
+                t_s: None,
+                r_m: self.outer_radius_m * (1.0 - f).max(0.0).sqrt(),
+                detail: loosen_detail(f),
+            });
+        }
         self.limits
     }
 }
@@ -248,6 +268,14 @@ impl Applicability {
 fn hop_detail(f: f64) -> String {
     format!(
         "from laid fraction {f:.4} on, the exact-geometry model needs a floor that pulls (N < 0)"
+    )
+}
+
+fn loosen_detail(f: f64) -> String {
+    format!(
+        "from laid fraction {f:.4} on, the exact-geometry model's outer turn needs more \
+         tension at the coil's top than the laid tape's pull gives: a tape with no bending \
+         stiffness would lift off its coil there"
     )
 }
 
@@ -260,6 +288,7 @@ pub fn label(kind: LimitKind) -> &'static str {
         LimitKind::LiftOff => "lift-off",
         LimitKind::FewTurns => "r<3b",
         LimitKind::ExactModelHops => "exact hops",
+        LimitKind::Loosens => "loosens",
         LimitKind::LeavesExact => "leaves exact",
     }
 }

@@ -496,6 +496,45 @@ impl ExactGeometry {
             .map(|k| self.laid_fraction(psi(k)))
     }
 
+    /// The first laid fraction at which the rolling spiral's outer turn asks the tape for
+    /// more tension than it has, scanning 4000 steps of `psi` over the table; `None` if it
+    /// never does, or where the model slides.
+    ///
+    /// The rigid spiral carries its outer turn round with it. At the top of the coil that
+    /// turn moves about the centre at `omega r`, and stays on the turn below only while its
+    /// tension `T` and gravity's pull towards the centre give the centripetal force: the
+    /// layer below can push it out, never pull it in:
+    /// ```text
+    /// T / r + lambda g cos(a) >= lambda omega^2 r   <=>   T >= lambda (omega^2 r^2 - g cos(a) r)
+    /// ```
+    /// A tape with no bending stiffness (the paper's, and the chain's) has no tension at the
+    /// top but what the laid tape's pull `-F_int` brings round (friction between the layers
+    /// can pass tension along, not make it from none). Where the need exceeds that pull the
+    /// outer turn of a floppy tape lifts off its coil at the top: the rigid coil holds it
+    /// there by a force the tape cannot give, and from here on it stands for a tape that is
+    /// stiff (or set in its coil) enough to stay wound.
+    pub fn loosen_onset_fraction(&self, friction: f64) -> Option<f64> {
+        const STEPS: u32 = 4000;
+        if self.sliding {
+            return None;
+        }
+        let (start, end) = (self.spiral.psi_out, self.traj.q_end());
+        (1..STEPS).find_map(|k| {
+            let psi = start - (start - end) * f64::from(k) / f64::from(STEPS);
+            let pull = -self.forces(psi, friction)?.f_int_n;
+            (self.outer_turn_tension_n(psi) > pull.max(0.0)).then(|| self.laid_fraction(psi))
+        })
+    }
+
+    /// The tension the rolling spiral's outer turn needs at the coil's top to stay on the
+    /// turn below, `lambda (omega^2 r^2 - g cos(a) r)` (N; see
+    /// [`Self::loosen_onset_fraction`]).
+    pub fn outer_turn_tension_n(&self, psi: f64) -> f64 {
+        let r = self.spiral.radius(psi);
+        let omega = Spiral::turn_rate(psi) * self.psidot(psi);
+        self.line_density_kg_m * (omega * omega * r * r - self.g_perp * r)
+    }
+
     /// [`Self::scan_hop_onset`] trying every step, to check it against.
     #[cfg(test)]
     fn scan_hop_onset_every_step(&self) -> Option<f64> {

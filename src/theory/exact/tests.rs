@@ -202,3 +202,47 @@ fn exact_geometry_normal_force_starts_at_the_weight_and_turns_negative_only_late
     assert_eq!(e.hop_onset.get(), Some(&Some(f)));
     assert_eq!(e.hop_onset_fraction(), Some(f));
 }
+
+#[test]
+fn the_outer_turn_needs_the_hoop_tension_of_its_spin_less_gravity_s_share() {
+    // A spinning ring holds itself by the tension lambda v^2; gravity at the coil's top
+    // pulls lambda g r of it towards the centre.
+    let e = ExactGeometry::new(yoga(0.3), 0.01);
+    let psi = e.psi_at_fraction(0.5);
+    let r = e.spiral.radius(psi);
+    let omega = e.state_at_psi(psi, 0.0).omega_rad_s;
+    let lambda = 1.5 / e.spiral.length();
+    assert_relative_eq!(
+        e.outer_turn_tension_n(psi),
+        lambda * (omega * omega * r * r - 9.81 * r),
+        max_relative = 1e-9
+    );
+}
+
+#[test]
+fn a_floppy_tape_stays_wound_while_gravity_holds_its_outer_turn_and_loosens_sooner_pushed_harder() {
+    let onset = |push: f64| {
+        ExactGeometry::new(yoga(push), 0.01)
+            .loosen_onset_fraction(1.0)
+            .expect("the yoga mat loosens before its end")
+    };
+    let (slow, fast) = (onset(0.1), onset(0.6));
+    // At the start gravity (g r = 0.59 m^2/s^2) outweighs the push's spin (0.3^2).
+    assert!(onset(0.3) > 0.05, "loosens at f = {}", onset(0.3));
+    assert!(
+        slow > onset(0.3) && onset(0.3) > fast,
+        "{slow} > {} > {fast}",
+        onset(0.3)
+    );
+    // Without gravity nothing holds the outer turn but the laid tape's pull, and the
+    // floor's friction leaves it none: loose from the start.
+    let weightless = ExactGeometry::new(
+        Params {
+            g_m_s2: 0.0,
+            ..yoga(0.3)
+        },
+        0.01,
+    );
+    let f = weightless.loosen_onset_fraction(1.0).expect("loosens");
+    assert!(f < 1e-3, "weightless coil loosens at f = {f}");
+}
