@@ -337,10 +337,12 @@ mod tests {
             vec![
                 LimitKind::Bunching,
                 LimitKind::LiftOff,
-                LimitKind::ExactModelHops
+                LimitKind::ExactModelHops,
+                LimitKind::Loosens
             ]
         );
         assert_eq!(limits[2].t_s, None, "the hop at f = 0.5 was never reached");
+        assert_eq!(limits[3].t_s, None, "nor the loosening at f = 0.26");
     }
 
     #[test]
