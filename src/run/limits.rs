@@ -1,7 +1,8 @@
 //! Where the references stop applying: slip, bunching, skid, lift-off, fewer than a few
-//! turns (eq. 7's O(b/r)), the exact model's hop and the contact line leaving the exact
-//! model's speed; judged against the rolling or, on a frictionless floor, the sliding exact
-//! model. It reads the model's observations; it stops nothing and writes nothing.
+//! turns (eq. 7's O(b/r)), the exact model's hop and its outer turn loosening, and the
+//! contact line leaving the exact model's speed; judged against the rolling or, on a
+//! frictionless floor, the sliding exact model. It reads the model's observations; it stops
+//! nothing and writes nothing.
 
 use serde::{Deserialize, Serialize};
 
