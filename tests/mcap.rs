@@ -505,6 +505,21 @@ fn inspect_counts_the_bang_s_drawings_and_where_the_tape_crosses_itself() {
 }
 
 #[test]
+fn the_yoga_mat_s_bang_is_drawn_with_its_layers_apart() {
+    // The tape has a thickness in the bang: its drawn midline never crosses itself, and two
+    // of its segments at least pi b apart along it never come closer than the overlap
+    // guard's bound lets them, b / 2.
+    let bytes = std::fs::read(logged().dir.join("run.mcap")).unwrap();
+    let inv = uncoil::output::inspect::inventory(&bytes).unwrap();
+    let bang = uncoil::output::inspect::bang::bang_drawings(&bytes, &inv)
+        .unwrap()
+        .expect("the yoga mat has a bang");
+    assert_eq!(bang.crossing, 0, "{bang:?}");
+    let (closest, _) = bang.closest.expect("its turns come within b of each other");
+    assert!(closest >= 0.5 * bang.thickness_m, "{bang:?}");
+}
+
+#[test]
 fn the_drawn_tape_reads_back_from_its_outer_end() {
     use uncoil::output::view::drawings::tape_drawings;
     let logged = logged();
