@@ -145,21 +145,45 @@ fn a_bad_range_or_a_setting_short_of_its_keys_exits_2_and_runs_nothing() {
         .stderr(predicates::str::contains("varied twice"));
 }
 
-/// The pushes alone, the other keys fixed: nothing else to pool them for, so they are a key
-/// of their own.
+/// The pushes alone, the other keys fixed: one setting's ensemble, pooled into its mean and
+/// standard error, with no Pareto front of the pushes; `--repeat-key none` keeps each run
+/// its own row, the pushes a key.
 #[test]
-fn a_sweep_of_the_pushes_alone_draws_them_as_a_key() {
+fn a_sweep_of_the_pushes_alone_is_one_ensemble() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("pushes");
     uncoil()
         .args(["sweep", "yoga-mat", "--jobs", "1", "--quiet"])
         .args(["--vary", "discretisation.links_per_turn=8"])
-        .args(["--vary", "push.contact_speed_m_s=0.3..0.301/2"])
+        .args(["--vary", "push.contact_speed_m_s=0.3..0.303/4"])
         .arg("--out")
         .arg(&out)
         .assert()
         .success();
     let text = report(&out, &[]);
+    assert!(
+        text.contains("### The ensemble: `push.contact_speed_m_s` pooled"),
+        "{text}"
+    );
+    assert!(text.contains("None: every run is a repetition"), "{text}");
+    assert!(!out.join("pareto.svg").exists());
+    // The floor's impacts as the mean and standard error of sweep.csv's four runs.
+    let t = SweepTable::read(&out.join("sweep.csv")).unwrap();
+    let c = t.column("bang_floor_normal_of").unwrap();
+    let x: Vec<f64> = t.rows.iter().map(|r| r[c].parse().unwrap()).collect();
+    let n = x.len() as f64;
+    let mean = x.iter().sum::<f64>() / n;
+    let se = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+    let row = text
+        .lines()
+        .find(|l| l.starts_with("| 4 | "))
+        .unwrap_or_else(|| panic!("a row of the 4 runs pooled: {text}"));
+    let cell = row.split(" | ").nth(2).unwrap();
+    assert_eq!(cell, format!("{mean:.3e} ± {se:.1e}"), "{row}");
+
+    let text = report(&out, &["--repeat-key", "none"]);
     assert!(text.contains("### `push.contact_speed_m_s`"), "{text}");
-    assert!(!text.contains("Pooled as"), "{text}");
+    assert!(!text.contains("The ensemble"), "{text}");
+    assert!(!text.contains("None: every run is a repetition"), "{text}");
+    assert!(out.join("pareto.svg").exists());
 }

@@ -107,8 +107,8 @@ pub struct ReportArgs {
     target: Option<(f64, f64)>,
     /// A varied key whose values are repetitions (e.g. `--vary name=rep1,rep2,rep3`): runs
     /// that differ only in it are pooled as one setting's ensemble (repeatable). Default:
-    /// push.contact_speed_m_s where another key is varied too, the pushes of an ensemble;
-    /// `none` pools nothing.
+    /// push.contact_speed_m_s, the pushes of an ensemble (a sweep of the pushes alone is one
+    /// ensemble); `none` pools nothing, each run its own row.
     #[arg(long, value_name = "KEY")]
     repeat_key: Vec<String>,
     /// No convergence fits or plots: the Pareto plot and the table only.
@@ -362,13 +362,8 @@ pub fn report(args: &ReportArgs) -> anyhow::Result<Exit> {
 const PUSH_KEY: &str = "push.contact_speed_m_s";
 
 /// The keys pooled as repetitions: those given (`none`: no key), or by default the pushes
-/// where another key takes two values or more beside them (`others_vary`; a sweep of the
-/// pushes alone draws them as a key of their own).
-fn repeat_keys(
-    given: &[String],
-    varied: &[String],
-    others_vary: bool,
-) -> anyhow::Result<Vec<String>> {
+/// (a sweep of the pushes alone is one ensemble).
+fn repeat_keys(given: &[String], varied: &[String]) -> anyhow::Result<Vec<String>> {
     if given.iter().any(|k| k == "none") {
         if given.len() > 1 {
             anyhow::bail!(Usage(
@@ -383,7 +378,7 @@ fn repeat_keys(
             varied.join(", ")
         )));
     }
-    if given.is_empty() && others_vary && varied.iter().any(|k| k == PUSH_KEY) {
+    if given.is_empty() && varied.iter().any(|k| k == PUSH_KEY) {
         return Ok(vec![PUSH_KEY.to_owned()]);
     }
     Ok(given.to_vec())
@@ -407,11 +402,7 @@ fn write_report(args: &ReportArgs, sweep: &Path) -> anyhow::Result<String> {
             .unwrap_or_else(|| "sweep".into())
     });
     let varied = table.varied_keys();
-    let others_vary = varied.iter().filter(|k| *k != PUSH_KEY).any(|k| {
-        let c = table.column(k).expect("a varied key is a column");
-        table.rows.iter().any(|r| r[c] != table.rows[0][c])
-    });
-    let repeats = repeat_keys(&args.repeat_key, &varied, others_vary)?;
+    let repeats = repeat_keys(&args.repeat_key, &varied)?;
     let mut analysis = SweepAnalysis::new(table, reference, cost, &repeats)?;
     analysis.target = args.target;
     if args.no_convergence {

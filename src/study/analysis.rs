@@ -194,6 +194,25 @@ impl SweepAnalysis {
         })
     }
 
+    /// Whether the sweep is one setting's ensemble: some key is a repetition, and no other
+    /// key takes two values. Its runs are repetitions, none a setting to choose: the report
+    /// pools them and draws no Pareto front.
+    pub fn one_setting(&self) -> bool {
+        !self.repeats.is_empty()
+            && self
+                .table
+                .varied_keys()
+                .iter()
+                .filter(|k| !self.repeats.contains(k))
+                .all(|k| {
+                    let c = self.table.column(k).expect("a varied key is a column");
+                    self.table
+                        .rows
+                        .iter()
+                        .all(|r| r[c] == self.table.rows[0][c])
+                })
+    }
+
     /// The runs that meet the target (error and cost at most the target's), cheapest
     /// first; empty without a target.
     pub fn meeting_target(&self) -> Vec<usize> {

@@ -96,11 +96,16 @@ pub struct BangStudy {
     /// Per observable: fit of |mean - the finest setting's mean| against h (the finest
     /// setting excluded); for the numerical share, whose limit is zero, of the mean itself.
     pub fit: Vec<Option<PowerFit>>,
+    /// Whether this is the sweep's one ensemble: no key takes two settings but the
+    /// repetitions (`key` names them), every run pooled as one setting.
+    pub pooled: bool,
 }
 
 /// The bang studies of a sweep with bang columns: one per numeric varied key and setting
 /// of the other keys, the `repeats` pooled as the ensemble, over the runs whose bang took
-/// time. Empty if the sweep has no bang columns or no key takes two settings.
+/// time. Where no key but the repetitions takes two settings, one study of every run
+/// pooled ([`BangStudy::pooled`]). Empty if the sweep has no bang columns, or no key takes
+/// two settings and none is a repetition.
 pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
     let col = |c: Col| table.col(c);
     let (Some(kin), Some(diss), Some(laid), Some(end), Some(bw), Some(rw), Some(duration)) = (
@@ -133,6 +138,8 @@ pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
         .filter(|k| !repeats.contains(k) && !tied.contains_key(k))
         .collect();
     let cell = |r: usize, k: &str| table.rows[r][table.column(k).expect("a varied key")].clone();
+    // A bang given no time (stop.bang_cap_s = 0) has nothing to say.
+    let landed = |r: usize| fits[r] && kin[r].is_finite() && duration[r] > 0.0;
     let mut studies = Vec::new();
     for key in &keys {
         let Some(vals) = table
@@ -143,8 +150,7 @@ pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
         };
         // Group the runs with a bang by the other (non-repeat) keys, then by this key.
         let mut groups: BTreeMap<String, BTreeMap<u64, Vec<usize>>> = BTreeMap::new();
-        // A bang given no time (stop.bang_cap_s = 0) has nothing to say.
-        for r in (0..rows).filter(|&r| fits[r] && kin[r].is_finite() && duration[r] > 0.0) {
+        for r in (0..rows).filter(|&r| landed(r)) {
             let g = keys
                 .iter()
                 .filter(|k| *k != key)
@@ -170,6 +176,17 @@ pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
                 .collect();
             studies.push(study);
         }
+    }
+    let all: Vec<usize> = (0..rows).filter(|&r| landed(r)).collect();
+    if studies.is_empty() && !repeats.is_empty() && all.len() >= 2 {
+        let mut pooled = ensemble_study(
+            &repeats.join(", "),
+            String::new(),
+            BTreeMap::from([(0.0_f64.to_bits(), all)]),
+            &values,
+        );
+        pooled.pooled = true;
+        studies.push(pooled);
     }
     studies
 }
@@ -218,6 +235,8 @@ fn ensemble_study(
             fit.push(None);
         } else if reading == NUMERICAL {
             fit.push(fit_power(&h, &m));
+        } else if m.len() < 2 {
+            fit.push(None);
         } else {
             let finest = *m.last().expect("two settings");
             let change: Vec<f64> = m[..m.len() - 1]
@@ -240,6 +259,7 @@ fn ensemble_study(
         mean,
         se,
         fit,
+        pooled: false,
     }
 }
 

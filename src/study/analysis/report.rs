@@ -24,8 +24,32 @@ impl BangStudy {
         } else {
             format!(" ({})", self.group)
         };
-        let _ = writeln!(o, "### `{}`{with}{group}\n", self.key);
         let names: Vec<&str> = BANG_OBSERVABLES.iter().map(|o| o.0).collect();
+        if self.pooled {
+            let _ = writeln!(
+                o,
+                "### The ensemble: `{}` pooled\n\nEvery run is a repetition of one setting: \
+                 each cell is the mean ± the standard error of the mean over the {} runs \
+                 (the shares are of what the bang dissipated).\n",
+                self.key, self.n[0]
+            );
+            let _ = writeln!(o, "| runs | {} |", names.join(" | "));
+            let _ = writeln!(o, "|---|{}", "---|".repeat(names.len()));
+            let cells: Vec<String> = (0..names.len())
+                .map(|k| show_mean(self.mean[k][0], self.se[k][0]))
+                .collect();
+            let _ = writeln!(o, "| {} | {} |", self.n[0], cells.join(" | "));
+            if self.numerical_marked(0) {
+                let _ = writeln!(
+                    o,
+                    "\nThe numerical share exceeds {} % in size: the split is not the physics' \
+                     alone.",
+                    100.0 * NUMERICAL_MARK
+                );
+            }
+            return o;
+        }
+        let _ = writeln!(o, "### `{}`{with}{group}\n", self.key);
         let _ = writeln!(o, "| {} | runs | {} |", self.key, names.join(" | "));
         let _ = writeln!(o, "|---|---|{}", "---|".repeat(names.len()));
         for i in 0..self.values.len() {
@@ -295,6 +319,15 @@ impl SweepAnalysis {
         let t = &self.table;
         let mut o = String::new();
         let _ = writeln!(o, "## Pareto front (error against cost)\n");
+        if self.one_setting() {
+            let _ = writeln!(
+                o,
+                "None: every run is a repetition of one setting (`{}`), none a setting to \
+                 choose (`--repeat-key none` ranks the runs themselves).\n",
+                self.repeats.join("`, `")
+            );
+            return o;
+        }
         if self.front.is_empty() {
             let _ = writeln!(o, "No run reached every milestone.\n");
         } else {
@@ -453,6 +486,7 @@ mod tests {
             mean,
             se: vec![vec![0.01, 0.01]; n],
             fit: vec![None; n],
+            pooled: false,
         }
     }
 

@@ -58,9 +58,12 @@ pub fn plot_sweep(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<
     std::fs::create_dir_all(dir)
         .with_context(|| format!("cannot create output folder {}", dir.display()))?;
     let mut written = Vec::new();
-    let pareto = dir.join("pareto.svg");
-    pareto_plot(&pareto, a, title)?;
-    written.push(pareto);
+    // One setting's repetitions are no front to choose from.
+    if !a.one_setting() {
+        let pareto = dir.join("pareto.svg");
+        pareto_plot(&pareto, a, title)?;
+        written.push(pareto);
+    }
     let mut keys: Vec<&String> = a.studies.iter().map(|s| &s.key).collect();
     keys.dedup();
     for key in keys {
@@ -307,7 +310,7 @@ fn bang_plots(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<Vec<
     let mut physical: Vec<&str> = a
         .bang
         .iter()
-        .filter(|b| b.physical)
+        .filter(|b| b.physical && !b.pooled)
         .map(|b| b.key.as_str())
         .collect();
     physical.dedup();
@@ -318,7 +321,12 @@ fn bang_plots(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<Vec<
         written.push(path);
     }
     let keys: Vec<&str> = a.bang.iter().map(|b| b.key.as_str()).collect();
-    for (i, b) in a.bang.iter().enumerate().filter(|(_, b)| !b.physical) {
+    for (i, b) in a
+        .bang
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| !b.physical && !b.pooled)
+    {
         let alone = keys.iter().filter(|k| **k == b.key).count() == 1;
         let stem = if alone {
             format!("bang-{}", b.key)
