@@ -132,8 +132,8 @@ fn bang_summary(o: &mut String, report: &RunReport, bang: &crate::run::BangRepor
         );
         let _ = writeln!(
             o,
-            "  one landing: a landing is chaotic, and the split's mean and its error come from \
-             an ensemble of pushes, e.g. `{}`",
+            "  one landing: a landing is chaotic, and the split's mean and its standard error \
+             come from an ensemble of pushes, e.g. {}",
             ensemble_command(report)
         );
     } else {
@@ -225,15 +225,15 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
     o
 }
 
-/// The command that runs this scene's bang as an ensemble: its push and the seven just above
-/// it (the ensembles of docs/final-bang.md). A shipped scene by
-/// its name; another by a placeholder for its file.
+/// The commands that run this scene's bang as an ensemble, its push and the seven just above
+/// it (the ensembles of docs/final-bang.md), and report it pooled. A shipped scene by its
+/// name; another by a placeholder for its file.
 fn ensemble_command(report: &RunReport) -> String {
     let name = &report.scene.name;
-    let scene = if crate::scene::shipped::text(name).is_some() {
-        name.clone()
+    let (scene, folder) = if crate::scene::shipped::text(name).is_some() {
+        (name.clone(), name.clone())
     } else {
-        "SCENE.toml".to_owned()
+        ("SCENE.toml".to_owned(), "SCENE".to_owned())
     };
     // Steps of a hundredth of the push's decade: 0.300, 0.301, ... for 0.3 m/s.
     let v = report.scene.push.contact_speed_m_s;
@@ -241,7 +241,8 @@ fn ensemble_command(report: &RunReport) -> String {
     let step = 10f64.powf(-decimals);
     let push = |k: f64| format!("{:.*}", decimals as usize, v + step * k);
     format!(
-        "uncoil sweep {scene} --vary push.contact_speed_m_s={}..{}/8",
+        "`uncoil sweep {scene} --vary push.contact_speed_m_s={}..{}/8`, then `uncoil \
+         sweep-report sweeps/{folder}`",
         push(0.0),
         push(7.0)
     )
