@@ -72,6 +72,17 @@ enum Command {
         /// With --live: hold simulated time to X times real time (0.1: ten times slower).
         #[arg(long, value_name = "X", requires = "live", value_parser = parse_pace)]
         pace: Option<f64>,
+        /// Land it from N pushes, its own and those just above it, side by side on the
+        /// cores, into one folder (default: runs/<scene name>-ensemble; sweep.csv and
+        /// report.md), and print the bang's every share as its mean ± standard error: a
+        /// landing is chaotic.
+        #[arg(long, value_name = "N", value_parser = parse_ensemble,
+              conflicts_with_all = ["live", "no_mcap"])]
+        ensemble: Option<usize>,
+        /// With --ensemble: keep the runs of an earlier call that ended by themselves and run
+        /// the rest (as `uncoil sweep --resume`).
+        #[arg(long, requires = "ensemble")]
+        resume: bool,
     },
     /// Read a run's MCAP log back: channels, message counts, time range, metadata, ledger;
     /// then the final bang's drawings: how many, and in how many the tape crosses itself.
@@ -158,13 +169,19 @@ fn main() -> ExitCode {
             no_mcap,
             live,
             pace,
+            ensemble,
+            resume,
         } => {
-            let view = View {
-                file: !no_mcap,
-                live,
-                pace,
-            };
-            run_any(&scene, &set, out, &view)
+            if let Some(n) = ensemble {
+                cli::sweep::ensemble(&scene, &set, n, out, resume)
+            } else {
+                let view = View {
+                    file: !no_mcap,
+                    live,
+                    pace,
+                };
+                run_any(&scene, &set, out, &view)
+            }
         }
         Command::Compare { scenes, set } => compare(&scenes, &set),
         Command::Scenes => {
@@ -219,8 +236,9 @@ fn run_any(
     if let Some(out) = &out {
         paths::out_folder(out)?;
     }
+    let overrides: Vec<String> = set.iter().map(|o| format!("{}={}", o.key, o.raw)).collect();
     match scene {
-        AnyScene::Coil(scene) => run_command(&scene, out, view),
+        AnyScene::Coil(scene) => run_command(&scene, out, view, &overrides),
         AnyScene::FoldedChain(chain) => run_chain_command(&chain, out, view),
     }
 }
@@ -251,7 +269,12 @@ fn inspect(file: &Path) -> anyhow::Result<Exit> {
 }
 
 /// `uncoil run` on a coil's scene.
-fn run_command(scene: &Scene, out: Option<PathBuf>, view: &View) -> anyhow::Result<Exit> {
+fn run_command(
+    scene: &Scene,
+    out: Option<PathBuf>,
+    view: &View,
+    overrides: &[String],
+) -> anyhow::Result<Exit> {
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(&scene.name));
     let shown = match (view.file, view.live) {
         (true, _) => files::View::File,
@@ -267,7 +290,7 @@ fn run_command(scene: &Scene, out: Option<PathBuf>, view: &View) -> anyhow::Resu
         return Err(e);
     }
     let stop = stop_flag();
-    let (text, end) = run_scene(scene, &mut files, &layout, &stop)?;
+    let (text, end) = run_scene(scene, &mut files, &layout, &stop, overrides)?;
     print!("{text}");
     match end.status() {
         Status::Completed => {}
@@ -483,6 +506,15 @@ fn parse_live(text: &str) -> Result<std::net::SocketAddr, String> {
         })
 }
 
+fn parse_ensemble(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(n) if (2..=1000).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "`{text}`: the landings of an ensemble, a whole number from 2 to 1000"
+        )),
+    }
+}
+
 fn parse_pace(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
         Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
@@ -524,10 +556,11 @@ fn run_scene(
     files: &mut RunFiles,
     layout: &Path,
     stop: &AtomicBool,
+    overrides: &[String],
 ) -> anyhow::Result<(String, StopReason)> {
     eprintln!("running {} into {} ...", scene.name, files.dir().display());
     let report = files.run(scene, None, stop)?;
-    let mut text = summary(&report, files.dir());
+    let mut text = summary(&report, files.dir(), overrides);
     if let Some(path) = files.log_path() {
         text.push_str(&format!(
             "Wrote {}: open it in Foxglove with the layout {}, or list it with `uncoil \

@@ -213,7 +213,8 @@ fn a_spool_whose_links_cannot_resolve_its_thickness_runs_its_bang_without_layers
     assert!(bang.chord_sag_m > 0.5 * b, "{bang:?}");
     let l = &report.ledger.bang;
     assert_eq!((l.layers_normal_j, l.layers_friction_j), (0.0, 0.0));
-    let summary = uncoil::output::summary::summary(&report, std::path::Path::new("runs/spool"));
+    let summary =
+        uncoil::output::summary::summary(&report, std::path::Path::new("runs/spool"), &[]);
     assert!(
         summary.contains("The tape's layers did not meet in the bang"),
         "{summary}"

@@ -81,3 +81,51 @@ fn wall_times_are_all_it_masks() {
     );
     assert_eq!(without_wall_times("a 0.050 s step\n"), "a 0.050 s step\n");
 }
+
+#[test]
+fn the_readme_s_answer_for_the_yoga_mat_is_what_its_ensemble_prints() {
+    // The README's table gives each share as mean ± standard error ± systematic band; the
+    // first two are `uncoil run yoga-mat --ensemble 8`'s.
+    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md"))
+        .expect("README.md");
+    let row = readme
+        .lines()
+        .find(|l| l.starts_with("| yoga mat (b/R = 1/12) |"))
+        .expect("the README's answer has the yoga mat's row");
+    let cells: Vec<&str> = row.split(" | ").collect();
+    let cwd = tempfile::tempdir().unwrap();
+    let out = Command::cargo_bin("uncoil")
+        .unwrap()
+        .current_dir(cwd.path())
+        .args(["run", "yoga-mat", "--ensemble", "8"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let printed = String::from_utf8(out.stdout).unwrap();
+    let figure = |label: &str| -> String {
+        let line = printed
+            .lines()
+            .find(|l| l.trim_start().starts_with(label))
+            .unwrap_or_else(|| panic!("`{label}` in:\n{printed}"));
+        line[line.find(label).unwrap() + label.len()..]
+            .trim()
+            .trim_end_matches(" %")
+            .to_owned()
+    };
+    let shares = [
+        "floor normal share",
+        "floor friction share",
+        "layers' impacts share",
+        "layers' friction share",
+        "freezing share",
+        "numerical share",
+    ];
+    for (k, label) in shares.iter().enumerate() {
+        let printed = figure(label);
+        assert!(
+            cells[k + 1].starts_with(&format!("{printed} ±")),
+            "README's {label} `{}`, the ensemble prints `{printed}`",
+            cells[k + 1]
+        );
+    }
+}

@@ -187,3 +187,65 @@ fn a_sweep_of_the_pushes_alone_is_one_ensemble() {
     assert!(!text.contains("None: every run is a repetition"), "{text}");
     assert!(out.join("pareto.svg").exists());
 }
+
+/// `uncoil run SCENE --ensemble N`: N pushes from the scene's own, its overrides kept, one
+/// folder, and the bang's shares printed as the mean and standard error of its sweep.csv.
+#[test]
+fn an_ensemble_is_one_command_and_prints_its_mean_and_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("ensemble");
+    let a = uncoil()
+        .args(["run", "yoga-mat", "--ensemble", "3"])
+        .args(["--set", "discretisation.links_per_turn=8"])
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    let printed = String::from_utf8(a.get_output().stdout.clone()).unwrap();
+    let t = SweepTable::read(&out.join("sweep.csv")).unwrap();
+    let cell = |r: usize, c: &str| t.rows[r][t.column(c).unwrap()].clone();
+    let pushes: Vec<String> = (0..3).map(|r| cell(r, "push.contact_speed_m_s")).collect();
+    assert_eq!(pushes, ["0.3", "0.301", "0.302"]);
+    assert!((0..3).all(|r| cell(r, "discretisation.links_per_turn") == "8"));
+    let x: Vec<f64> = (0..3)
+        .map(|r| cell(r, "bang_floor_normal_of").parse().unwrap())
+        .collect();
+    let mean = x.iter().sum::<f64>() / 3.0;
+    let se = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / 2.0 / 3.0).sqrt();
+    let want = format!(
+        "floor normal share           {:.1} ± {:.1} %",
+        100.0 * mean,
+        100.0 * se
+    );
+    assert!(printed.contains(&want), "{want}\n{printed}");
+    assert!(
+        printed.contains("The final bang over 3 landings"),
+        "{printed}"
+    );
+    assert!(out.join("report.md").exists());
+    uncoil()
+        .args(["run", "yoga-mat", "--ensemble", "1"])
+        .arg("--out")
+        .arg(dir.path().join("one"))
+        .assert()
+        .code(2);
+}
+
+/// The main job's hint names the ensemble of the run it ends, its overrides kept.
+#[test]
+fn the_main_job_s_hint_names_its_own_ensemble() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = uncoil()
+        .args(["run", "yoga-mat", "--no-mcap"])
+        .args(["--set", "discretisation.links_per_turn=8"])
+        .arg("--out")
+        .arg(dir.path().join("run"))
+        .assert()
+        .success();
+    let printed = String::from_utf8(a.get_output().stdout.clone()).unwrap();
+    assert!(
+        printed
+            .contains("`uncoil run yoga-mat --ensemble 8 --set discretisation.links_per_turn=8`"),
+        "{printed}"
+    );
+}

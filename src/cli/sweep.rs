@@ -291,6 +291,76 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<Exit> {
     Ok(ended(&sweep.run(&dir, &opts)?, all))
 }
 
+/// `uncoil run SCENE --ensemble N`: the scene with its overrides, landed from `n` pushes
+/// (its own and those just above it, as the main job's hint spreads them), run as a sweep
+/// into `out` (default `runs/<scene>-ensemble`; `sweep.csv`, and `report.md` with the
+/// pooled table), then the bang's every observable as its mean and standard error over the
+/// runs that landed. Signals, `--resume` and the exit are the sweep's.
+pub fn ensemble(
+    scene: &Path,
+    set: &[Override],
+    n: usize,
+    out: Option<PathBuf>,
+    resume: bool,
+) -> anyhow::Result<Exit> {
+    let (text, stem) = read_scene_file(scene)?;
+    if shipped::kind(&text) != "coil" {
+        return Err(Usage(
+            "--ensemble: a folded chain lands the same way from every push; an ensemble is a \
+             coil's"
+                .into(),
+        )
+        .into());
+    }
+    let built = scene_with_overrides(&text, &stem, set).map_err(|e| e.in_file(scene))?;
+    let (first, last) = uncoil::output::summary::ensemble_pushes(built.push.contact_speed_m_s, n);
+    let mut vary = Vec::new();
+    for o in set.iter().filter(|o| o.key != PUSH_KEY) {
+        vary.push(format!("{}={}", o.key, o.raw).parse::<Vary>()?);
+    }
+    vary.push(format!("{PUSH_KEY}={first}..{last}/{n}").parse::<Vary>()?);
+    let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{stem}-ensemble")));
+    let exit = sweep(SweepArgs {
+        scene: Some(scene.to_path_buf()),
+        vary,
+        shard: None,
+        jobs: None,
+        out: Some(dir.clone()),
+        quiet: false,
+        resume,
+        merge: Vec::new(),
+        allow_partial: false,
+    })?;
+    let csv = dir.join("sweep.csv");
+    if signals::received().is_none() && csv.exists() {
+        let args = ReportArgs {
+            sweep: csv.clone(),
+            out: None,
+            reference: RefArg::Exact,
+            cost: CostArg::Unroll,
+            title: None,
+            converge: Vec::new(),
+            target: None,
+            repeat_key: Vec::new(),
+            no_convergence: true,
+        };
+        write_report(&args, &csv)?;
+        let table = SweepTable::read(&csv)?;
+        let analysis = SweepAnalysis::new(
+            table,
+            Reference::Exact,
+            Col::WallRolling.name(),
+            &[PUSH_KEY.to_owned()],
+        )?;
+        match analysis.bang.iter().find(|b| b.pooled) {
+            Some(pooled) => print!("{}", pooled.summary(&first, &last)),
+            None => println!("fewer than two runs landed: no ensemble to pool"),
+        }
+        println!("its report: {}", shell_word(&dir.join("report.md")));
+    }
+    Ok(exit)
+}
+
 /// What a sweep's end prints, and its exit (see [`sweep`]); `all` says whether it ran the
 /// whole grid (a shard's file is merged before its report is drawn).
 fn ended(o: &SweepOutcome, all: bool) -> Exit {

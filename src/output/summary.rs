@@ -77,7 +77,12 @@ fn rival_times(o: &mut String, report: &RunReport) {
 
 /// The final bang's part of the summary: what it received, where that energy went by
 /// mechanism, how violent it was and where the tape ended.
-fn bang_summary(o: &mut String, report: &RunReport, bang: &crate::run::BangReport) {
+fn bang_summary(
+    o: &mut String,
+    report: &RunReport,
+    bang: &crate::run::BangReport,
+    overrides: &[String],
+) {
     let l = &report.ledger;
     let end = match bang.ended_by {
         Some(crate::model::BangEnd::Rest) => "came to rest",
@@ -133,8 +138,8 @@ fn bang_summary(o: &mut String, report: &RunReport, bang: &crate::run::BangRepor
         let _ = writeln!(
             o,
             "  one landing: a landing is chaotic, and the split's mean and its standard error \
-             come from an ensemble of pushes, e.g. {}",
-            ensemble_command(report)
+             come from an ensemble of pushes: `{}`",
+            ensemble_command(report, overrides)
         );
     } else {
         let _ = writeln!(
@@ -166,8 +171,9 @@ fn bang_summary(o: &mut String, report: &RunReport, bang: &crate::run::BangRepor
     );
 }
 
-/// The readable summary printed after a run.
-pub fn summary(report: &RunReport, out_dir: &Path) -> String {
+/// The readable summary printed after a run; `overrides` are the run's `--set` arguments
+/// (`KEY=VALUE`), which the commands it suggests repeat.
+pub fn summary(report: &RunReport, out_dir: &Path, overrides: &[String]) -> String {
     let s = &report.scene;
     let mut o = String::new();
     let _ = writeln!(
@@ -212,7 +218,7 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
     ledger_summary(&mut o, report);
     if let Some(bang) = &report.bang {
         let _ = writeln!(o);
-        bang_summary(&mut o, report, bang);
+        bang_summary(&mut o, report, bang, overrides);
     }
     let _ = writeln!(o);
     health_summary(&mut o, report);
@@ -225,27 +231,32 @@ pub fn summary(report: &RunReport, out_dir: &Path) -> String {
     o
 }
 
-/// The commands that run this scene's bang as an ensemble, its push and the seven just above
-/// it (the ensembles of docs/final-bang.md), and report it pooled. A shipped scene by its
-/// name; another by a placeholder for its file.
-fn ensemble_command(report: &RunReport) -> String {
+/// The command that lands this scene, with the run's `overrides`, from its push and the
+/// seven just above it (`uncoil run --ensemble`), and prints the split's mean and error. A
+/// shipped scene by its name; another by a placeholder for its file.
+fn ensemble_command(report: &RunReport, overrides: &[String]) -> String {
     let name = &report.scene.name;
-    let (scene, folder) = if crate::scene::shipped::text(name).is_some() {
-        (name.clone(), name.clone())
+    let scene = if crate::scene::shipped::text(name).is_some() {
+        name.clone()
     } else {
-        ("SCENE.toml".to_owned(), "SCENE".to_owned())
+        "SCENE.toml".to_owned()
     };
-    // Steps of a hundredth of the push's decade: 0.300, 0.301, ... for 0.3 m/s.
-    let v = report.scene.push.contact_speed_m_s;
+    let mut command = format!("uncoil run {scene} --ensemble 8");
+    for o in overrides {
+        command.push_str(" --set ");
+        command.push_str(&crate::output::shell_word(Path::new(o)));
+    }
+    command
+}
+
+/// An ensemble's `n` pushes from `v` (m/s), its first and last as written: steps of a
+/// hundredth of the push's decade (0.300, 0.301, ... for 0.3 m/s), a third of a percent
+/// apart, so that the landings differ and the unrolls hardly do.
+pub fn ensemble_pushes(v: f64, n: usize) -> (String, String) {
     let decimals = (2.0 - v.log10().floor()).clamp(0.0, 12.0);
     let step = 10f64.powf(-decimals);
     let push = |k: f64| format!("{:.*}", decimals as usize, v + step * k);
-    format!(
-        "`uncoil sweep {scene} --vary push.contact_speed_m_s={}..{}/8`, then `uncoil \
-         sweep-report sweeps/{folder}`",
-        push(0.0),
-        push(7.0)
-    )
+    (push(0.0), push(n.saturating_sub(1) as f64))
 }
 
 /// The energy ledger: E0, what was lost before the bang and where, what the bang received
