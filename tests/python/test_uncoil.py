@@ -273,3 +273,18 @@ def test_the_folded_chain_runs_by_name_and_gives_what_its_files_hold(tmp_path, m
     assert sorted(p.name for p in tmp_path.iterdir()) == ["chain"]
     with pytest.raises(uncoil.SceneError, match="a folded chain's scene; sweep takes a coil's"):
         uncoil.sweep("folded-chain", {"chain.links": [20, 40]})
+
+
+def test_an_ensemble_lands_from_its_pushes_and_pools_the_shares(tmp_path):
+    e = uncoil.ensemble(
+        "yoga-mat", n=3, overrides={"discretisation.links_per_turn": 8}, out=tmp_path
+    )
+    runs = e["runs"]
+    assert list(runs["push.contact_speed_m_s"]) == [0.3, 0.301, 0.302]
+    assert list(runs["discretisation.links_per_turn"]) == [8, 8, 8]
+    assert e["n"] == 3 and (tmp_path / "sweep.csv").exists()
+    x = np.asarray(runs["bang_floor_normal_of"])
+    mean, se = e["pooled"]["bang_floor_normal_of"]
+    assert mean == pytest.approx(x.mean()) and se == pytest.approx(x.std(ddof=1) / 3**0.5)
+    with pytest.raises(ValueError, match="from 2 to 1000"):
+        uncoil.ensemble("yoga-mat", n=1)

@@ -29,6 +29,7 @@ __all__ = [
     "RunResult",
     "Scene",
     "SceneError",
+    "ensemble",
     "load_scene",
     "run",
     "scenes",
@@ -191,3 +192,49 @@ def sweep(
         pairs.append((key, [_toml_value(v) for v in values]))
     header, rows = _uncoil.sweep(scene, pairs, jobs, None if out is None else os.fspath(out))
     return {name: _column([row[k] for row in rows]) for k, name in enumerate(header)}
+
+
+#: The bang's shares an ensemble pools (columns of `sweep.csv`, of what the bang dissipated).
+BANG_SHARES = (
+    "bang_floor_normal_of",
+    "bang_floor_friction_of",
+    "bang_layers_normal_of",
+    "bang_layers_friction_of",
+    "bang_freeze_of",
+    "bang_numerical_of",
+)
+
+
+def ensemble(
+    scene: PathLikeStr,
+    n: int = 8,
+    overrides: Optional[Mapping[str, Any]] = None,
+    jobs: Optional[int] = None,
+    out: Optional[PathLikeStr] = None,
+) -> Dict[str, Any]:
+    """Lands `scene` (a coil's scene file or shipped name, with `overrides`) from `n` pushes,
+    its own and those just above it (a hundredth of the push's decade apart), as
+    `uncoil run SCENE --ensemble N` does: a landing is chaotic.
+
+    Gives {"runs": the sweep's table by column (as `sweep` gives it), "pooled": {column:
+    (mean, standard error of the mean)} for each of `BANG_SHARES` over the runs that ran to
+    their end (status "ok"), "n": how many they were}. Files are written only into `out`.
+    """
+    if not 2 <= n <= 1000:
+        raise ValueError(f"n = {n}: the landings of an ensemble, from 2 to 1000")
+    given = dict(overrides or {})
+    push = json.loads(load_scene(scene, given).to_json())["push"]["contact_speed_m_s"]
+    decimals = min(max(2 - math.floor(math.log10(push)), 0), 12)
+    pushes = [round(push + k * 10.0 ** -decimals, decimals) for k in range(n)]
+    vary: Dict[str, Any] = {k: [v] for k, v in given.items() if k != "push.contact_speed_m_s"}
+    vary["push.contact_speed_m_s"] = pushes
+    runs = sweep(scene, vary, jobs=jobs, out=out)
+    landed = np.array([status == "ok" for status in runs["status"]], dtype=bool)
+    pooled: Dict[str, Any] = {}
+    for column in BANG_SHARES:
+        x = np.asarray(runs[column], dtype=float)[landed]
+        x = x[np.isfinite(x)]
+        mean = float(x.mean()) if len(x) else math.nan
+        se = float(x.std(ddof=1) / math.sqrt(len(x))) if len(x) > 1 else math.nan
+        pooled[column] = (mean, se)
+    return {"runs": runs, "pooled": pooled, "n": int(landed.sum())}
