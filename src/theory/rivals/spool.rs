@@ -111,13 +111,17 @@ pub(super) fn single_turn_rivals(scene: &Scene, model: Arc<ExactGeometry>) -> Ve
         exact(model, false),
         from_rate(
             "eq.62 A8",
-            "eq. (62), footnote 15's variable-mass Lagrangian, corrected per ERRATA A8",
+            "eq. (62), footnote 15's variable-mass Lagrangian, corrected per ERRATA A8 (its line \
+             3 to 4: -(1 - cos) - cos / 2 = -(2 - cos) / 2); that Lagrangian is not this \
+             system's, so its form corrected is off by percents",
             false,
             move |q| eq62(2.0 * PI * (1.0 - q)) / (2.0 * PI),
         ),
         from_rate(
             "eq.62 print",
-            "eq. (62) as printed, with theta'^2 (1 - cos + sin / (2 pi - theta)) (ERRATA A8)",
+            "eq. (62) as printed, with theta'^2 (1 - cos + sin / (2 pi - theta)) (ERRATA A8): \
+             the slip happens to bring that Lagrangian near eq. (45); its closeness is no \
+             evidence against A8",
             false,
             move |q| eq62_printed(2.0 * PI * (1.0 - q)) / (2.0 * PI),
         ),
