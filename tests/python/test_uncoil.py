@@ -288,3 +288,17 @@ def test_an_ensemble_lands_from_its_pushes_and_pools_the_shares(tmp_path):
     assert mean == pytest.approx(x.mean()) and se == pytest.approx(x.std(ddof=1) / 3**0.5)
     with pytest.raises(ValueError, match="from 2 to 1000"):
         uncoil.ensemble("yoga-mat", n=1)
+
+
+def test_sweep_takes_a_range_and_keys_varied_together_as_the_command_line_does(tmp_path):
+    t = uncoil.sweep(
+        "yoga-mat",
+        {
+            "discretisation.links_per_turn:stop.bang_radius_m": [(8, 0.005), (8, 0.0075)],
+            "push.contact_speed_m_s": "0.300..0.301/2",
+        },
+        jobs=1,
+    )
+    assert list(t["push.contact_speed_m_s"]) == [0.3, 0.301, 0.3, 0.301]
+    assert list(t["stop.bang_radius_m"]) == [0.005, 0.005, 0.0075, 0.0075]
+    assert list(t["discretisation.links_per_turn"]) == [8, 8, 8, 8]

@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 from typing import Any, Dict, List, Mapping, Optional, Union
 
 import numpy as np
@@ -57,6 +58,18 @@ def _toml_value(value: Any) -> str:
     if isinstance(value, str):
         return json.dumps(value)
     raise TypeError(f"an override must be a number, a bool or a string, not {type(value).__name__}")
+
+
+#: An even range of values, `A..B/N`, as `uncoil sweep --vary` takes it.
+_RANGE = re.compile(r"[^,:/]+\.\.[^,:/]+/[0-9]+")
+
+
+def _setting(value: Any) -> str:
+    """One setting of a varied key as `uncoil sweep --vary` takes it: a value, or for keys
+    varied together (`a:b`) a tuple of theirs joined by `:`."""
+    if isinstance(value, tuple):
+        return ":".join(_toml_value(v) for v in value)
+    return _toml_value(value)
 
 
 def scenes() -> Dict[str, str]:
@@ -179,17 +192,26 @@ def sweep(
     jobs: Optional[int] = None,
     out: Optional[PathLikeStr] = None,
 ) -> Dict[str, Union[np.ndarray, List[str]]]:
-    """Runs `scene` (a coil's `Scene`, path or shipped name) over the product grid of `vary` ({"discretisation.links_per_turn": [16, 32]},
-    the last key varying fastest), `jobs` runs at once (default one per core), as
-    `uncoil sweep` does, and gives `sweep.csv` by column: numbers as float64 arrays, the
-    status as text. Files are written only into `out`.
+    """Runs `scene` (a coil's `Scene`, path or shipped name) over the product grid of `vary`
+    ({"discretisation.links_per_turn": [16, 32]}, the last key varying fastest), `jobs` runs
+    at once (default one per core), as `uncoil sweep` does, and gives `sweep.csv` by column:
+    numbers as float64 arrays, the status as text. Files are written only into `out`.
+
+    As on the command line, a key's values may be an even range written `"A..B/N"`
+    ({"push.contact_speed_m_s": "0.300..0.307/8"}), and keys joined by `:` are varied
+    together, each value a tuple of theirs ({"tape.thickness_m:solver.bang_piece_m":
+    [(0.003, 0.015), (0.001, 0.005)]}).
     """
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     pairs = []
     for key, values in vary.items():
-        values = [values] if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__") else values
-        pairs.append((key, [_toml_value(v) for v in values]))
+        if isinstance(values, str) and _RANGE.fullmatch(values.strip()):
+            pairs.append((key, [values.strip()]))
+            continue
+        if isinstance(values, (str, bytes, tuple)) or not hasattr(values, "__iter__"):
+            values = [values]
+        pairs.append((key, [_setting(v) for v in values]))
     header, rows = _uncoil.sweep(scene, pairs, jobs, None if out is None else os.fspath(out))
     return {name: _column([row[k] for row in rows]) for k, name in enumerate(header)}
 
