@@ -243,24 +243,26 @@ impl Applicability {
         &self.limits
     }
 
-    /// The limits, in the order they were met; the exact-geometry model's hop is listed
-    /// with no time if the run never reached it.
+    /// The limits, in the order they were met; the exact-geometry model's hop and its
+    /// loosening are listed with no time if the run never reached them.
     pub fn finish(mut self) -> Vec<ReferenceLimit> {
-        if let (Some(f), false) = (self.hop_fraction, self.seen(LimitKind::ExactModelHops)) {
-            self.limits.push(ReferenceLimit {
-                kind: LimitKind::ExactModelHops,
-                t_s: None,
-                r_m: self.outer_radius_m * (1.0 - f).max(0.0).sqrt(),
-                detail: hop_detail(f),
-            });
-        }
-        if let (Some(f), false) = (self.loosen_fraction, self.seen(LimitKind::Loosens)) {
-            self.limits.push(ReferenceLimit {
-                kind: LimitKind::Loosens,
-                t_s: None,
-                r_m: self.outer_radius_m * (1.0 - f).max(0.0).sqrt(),
-                detail: loosen_detail(f),
-            });
+        let unreached = [
+            (
+                LimitKind::ExactModelHops,
+                self.hop_fraction,
+                hop_detail as fn(f64) -> String,
+            ),
+            (LimitKind::Loosens, self.loosen_fraction, loosen_detail),
+        ];
+        for (kind, fraction, detail) in unreached {
+            if let Some(f) = fraction.filter(|_| !self.seen(kind)) {
+                self.limits.push(ReferenceLimit {
+                    kind,
+                    t_s: None,
+                    r_m: self.outer_radius_m * (1.0 - f).max(0.0).sqrt(),
+                    detail: detail(f),
+                });
+            }
         }
         self.limits
     }
