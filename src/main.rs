@@ -73,11 +73,12 @@ enum Command {
         #[arg(long, value_name = "X", requires = "live", value_parser = parse_pace)]
         pace: Option<f64>,
         /// Land it from N pushes, its own and those just above it, side by side on the
-        /// cores, into one folder (default: runs/<scene name>-ensemble; sweep.csv and
-        /// report.md), and print the bang's every share as its mean ± standard error: a
+        /// cores, into one folder (default: runs/<scene name>-ensemble; each run's files in
+        /// run-<index>/, sweep.csv, ensemble.csv and report.md), and print the milestones'
+        /// times as mean ± spread and the bang's every share as mean ± standard error: a
         /// landing is chaotic.
         #[arg(long, value_name = "N", value_parser = parse_ensemble,
-              conflicts_with_all = ["live", "no_mcap"])]
+              conflicts_with = "live")]
         ensemble: Option<usize>,
         /// With --ensemble: keep the runs of an earlier call that ended by themselves and run
         /// the rest (as `uncoil sweep --resume`).
@@ -173,7 +174,7 @@ fn main() -> ExitCode {
             resume,
         } => {
             if let Some(n) = ensemble {
-                cli::sweep::ensemble(&scene, &set, n, out, resume)
+                cli::sweep::ensemble(&scene, &set, n, out, resume, no_mcap)
             } else {
                 let view = View {
                     file: !no_mcap,

@@ -113,7 +113,7 @@ fn the_readme_s_answer_for_the_yoga_mat_is_what_its_ensemble_prints() {
             .to_owned()
     };
     let shares = [
-        "floor normal share",
+        "floor impacts share",
         "floor friction share",
         "layers' impacts share",
         "layers' friction share",

@@ -83,7 +83,7 @@ fn keys_varied_together_a_push_range_and_a_core_make_one_readable_table() {
     );
     let svg = std::fs::read_to_string(out.join("shares-floor.friction.svg")).unwrap();
     for panel in [
-        "floor normal share",
+        "floor impacts share",
         "freezing share",
         "still moving / kinetic in",
     ] {
@@ -189,7 +189,8 @@ fn a_sweep_of_the_pushes_alone_is_one_ensemble() {
 }
 
 /// `uncoil run SCENE --ensemble N`: N pushes from the scene's own, its overrides kept, one
-/// folder, and the bang's shares printed as the mean and standard error of its sweep.csv.
+/// folder with each run's files, the milestones printed as the mean and spread and the
+/// bang's shares as the mean and standard error of its sweep.csv, both in ensemble.csv.
 #[test]
 fn an_ensemble_is_one_command_and_prints_its_mean_and_error() {
     let dir = tempfile::tempdir().unwrap();
@@ -213,7 +214,7 @@ fn an_ensemble_is_one_command_and_prints_its_mean_and_error() {
     let mean = x.iter().sum::<f64>() / 3.0;
     let se = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / 2.0 / 3.0).sqrt();
     let want = format!(
-        "floor normal share           {:.1} ± {:.1} %",
+        "floor impacts share          {:.1} ± {:.1} %",
         100.0 * mean,
         100.0 * se
     );
@@ -223,12 +224,72 @@ fn an_ensemble_is_one_command_and_prints_its_mean_and_error() {
         "{printed}"
     );
     assert!(out.join("report.md").exists());
+    // ensemble.csv holds what it printed, and each run's own files are kept.
+    let pooled = SweepTable::read(&out.join("ensemble.csv")).unwrap();
+    let row = |q: &str| {
+        pooled
+            .rows
+            .iter()
+            .find(|r| r[0] == q)
+            .unwrap_or_else(|| panic!("`{q}` in ensemble.csv"))
+            .clone()
+    };
+    let floor = row("floor impacts share");
+    let (m, s): (f64, f64) = (floor[3].parse().unwrap(), floor[5].parse().unwrap());
+    assert!(
+        (m - mean).abs() <= 1e-9 * mean && (s - se).abs() <= 1e-6 * se,
+        "{floor:?}"
+    );
+    assert_eq!(floor[2], "3");
+    // The milestones as mean ± spread (the sample standard deviation), in the runs' order.
+    let t: Vec<f64> = (0..3)
+        .map(|r| cell(r, "t_sim_0.5R").parse().unwrap())
+        .collect();
+    let tm = t.iter().sum::<f64>() / 3.0;
+    let sd = (t.iter().map(|v| (v - tm).powi(2)).sum::<f64>() / 2.0).sqrt();
+    let half = row("t 0.5R");
+    assert!(
+        (half[3].parse::<f64>().unwrap() - tm).abs() < 1e-9,
+        "{half:?}"
+    );
+    assert!(
+        (half[4].parse::<f64>().unwrap() - sd).abs() < 1e-9,
+        "{half:?}"
+    );
+    let want = format!("  0.5R       {tm:>9.4} ± {sd:.4} s");
+    assert!(printed.contains(&want), "{want}\n{printed}");
+    let first = printed.find("  0.75R").unwrap();
+    assert!(first < printed.find("  2b").unwrap() && printed.find("  2b") < printed.find("  0.1R"));
+    for k in 0..3 {
+        let run = out.join(format!("run-{k}"));
+        for f in ["report.json", "samples.csv", "run.mcap"] {
+            assert!(run.join(f).exists(), "{}", run.join(f).display());
+        }
+    }
     uncoil()
         .args(["run", "yoga-mat", "--ensemble", "1"])
         .arg("--out")
         .arg(dir.path().join("one"))
         .assert()
         .code(2);
+    // A folder of another ensemble, or of one run, is refused before anything runs.
+    uncoil()
+        .args(["run", "yoga-mat", "--ensemble", "2"])
+        .args(["--set", "discretisation.links_per_turn=8"])
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(2)
+        .stderr(predicates::str::contains("another sweep's files"));
+    std::fs::write(dir.path().join("report.json"), "{}").unwrap();
+    uncoil()
+        .args(["run", "yoga-mat", "--ensemble", "2"])
+        .arg("--out")
+        .arg(dir.path())
+        .assert()
+        .code(2)
+        .stderr(predicates::str::contains("a run's files (report.json)"));
+    assert!(!dir.path().join("sweep.csv").exists());
 }
 
 /// The main job's hint names the ensemble of the run it ends, its overrides kept.

@@ -18,8 +18,8 @@ import sys
 from collections import defaultdict
 
 SHARES = [
-    ("normal", "bang_floor_normal_of"),
-    ("friction", "bang_floor_friction_of"),
+    ("floor impacts", "bang_floor_normal_of"),
+    ("floor friction", "bang_floor_friction_of"),
     ("freezing", "bang_freeze_of"),
     ("numerical", "bang_numerical_of"),
     ("still moving", "bang_still_moving_of"),
@@ -99,7 +99,7 @@ def main() -> None:
             if name == "numerical" and abs(m) > MARK:
                 marked = True
             cells.append(percent(m, s))
-            if name == "friction" and mu > 0:
+            if name == "floor friction" and mu > 0:
                 fits[tape][0].append(mu)
                 fits[tape][1].append(m)
                 fits[tape][2].append(s)

@@ -22,7 +22,7 @@ pub struct PathError {
 }
 
 impl PathError {
-    fn new(path: &Path, found: impl Into<String>, expected: impl Into<String>) -> Self {
+    pub fn new(path: &Path, found: impl Into<String>, expected: impl Into<String>) -> Self {
         Self {
             path: path.to_owned(),
             found: found.into(),

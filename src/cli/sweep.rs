@@ -9,14 +9,17 @@ use crate::cli::paths::{self, PathError};
 
 use clap::{Args, ValueEnum};
 
+use uncoil::output::files::View;
+use uncoil::output::folder::{LOG, REPORT, SAMPLES};
 use uncoil::output::{shell_word, write_atomic};
 use uncoil::run::signals;
 use uncoil::scene::overrides::{Override, scene_with_overrides};
 use uncoil::scene::read_scene_file;
 use uncoil::scene::shipped;
-use uncoil::study::analysis::{Reference, SweepAnalysis};
+use uncoil::study::analysis::{Ensemble, Reference, SweepAnalysis};
 use uncoil::study::sweep::{
-    Col, Shard, Sweep, SweepOptions, SweepOutcome, SweepTable, Vary, merge, write_merged,
+    Col, GridFile, Shard, Sweep, SweepOptions, SweepOutcome, SweepTable, Vary, merge, read_grid,
+    run_folder, write_merged,
 };
 
 /// Arguments of `uncoil sweep`.
@@ -206,6 +209,12 @@ fn merge_command(files: &[PathBuf], dir: &Path, allow_partial: bool) -> anyhow::
 /// (and none failed), 130, 143 or 129 a signal stopped it (SIGINT, SIGTERM, SIGHUP: the
 /// runs in progress are rows marked `interrupted`, which `--resume` runs again).
 pub fn sweep(args: SweepArgs) -> anyhow::Result<Exit> {
+    sweep_keeping(args, None)
+}
+
+/// [`sweep`], each run's own files kept in its folder if `run_files` says so
+/// ([`SweepOptions::run_files`]).
+fn sweep_keeping(args: SweepArgs, run_files: Option<View>) -> anyhow::Result<Exit> {
     if !args.merge.is_empty() {
         let dir = args.out.unwrap_or_else(|| folder_of(&args.merge[0]));
         return merge_command(&args.merge, &dir, args.allow_partial);
@@ -273,6 +282,7 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<Exit> {
         // A signal stops the runs in progress (their rows say `interrupted`) and starts no
         // other; `--resume` runs them and the rest.
         stop: crate::stop_flag(),
+        run_files,
     };
     if opts.progress {
         eprintln!(
@@ -293,15 +303,18 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<Exit> {
 
 /// `uncoil run SCENE --ensemble N`: the scene with its overrides, landed from `n` pushes
 /// (its own and those just above it, as the main job's hint spreads them), run as a sweep
-/// into `out` (default `runs/<scene>-ensemble`; `sweep.csv`, and `report.md` with the
-/// pooled table), then the bang's every observable as its mean and standard error over the
-/// runs that landed. Signals, `--resume` and the exit are the sweep's.
+/// into `out` (default `runs/<scene>-ensemble`): `sweep.csv`, each run's own files in
+/// `run-<index>/` (its `run.mcap` unless `no_mcap`), `report.md`, and `ensemble.csv`, the
+/// milestones' times as mean and spread and the bang's every observable as mean and
+/// standard error, which it prints. Signals, `--resume` and the exit are the sweep's; a
+/// folder that holds another run's or another sweep's files is refused (exit 2).
 pub fn ensemble(
     scene: &Path,
     set: &[Override],
     n: usize,
     out: Option<PathBuf>,
     resume: bool,
+    no_mcap: bool,
 ) -> anyhow::Result<Exit> {
     let (text, stem) = read_scene_file(scene)?;
     if shipped::kind(&text) != "coil" {
@@ -320,17 +333,22 @@ pub fn ensemble(
     }
     vary.push(format!("{PUSH_KEY}={first}..{last}/{n}").parse::<Vary>()?);
     let dir = out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{stem}-ensemble")));
-    let exit = sweep(SweepArgs {
-        scene: Some(scene.to_path_buf()),
-        vary,
-        shard: None,
-        jobs: None,
-        out: Some(dir.clone()),
-        quiet: false,
-        resume,
-        merge: Vec::new(),
-        allow_partial: false,
-    })?;
+    ensemble_folder(&dir, &GridFile::new(&text, &stem, &vary, Shard::ALL))?;
+    let view = if no_mcap { View::Off } else { View::File };
+    let exit = sweep_keeping(
+        SweepArgs {
+            scene: Some(scene.to_path_buf()),
+            vary,
+            shard: None,
+            jobs: None,
+            out: Some(dir.clone()),
+            quiet: false,
+            resume,
+            merge: Vec::new(),
+            allow_partial: false,
+        },
+        Some(view),
+    )?;
     let csv = dir.join("sweep.csv");
     if signals::received().is_none() && csv.exists() {
         let args = ReportArgs {
@@ -345,20 +363,53 @@ pub fn ensemble(
             no_convergence: true,
         };
         write_report(&args, &csv)?;
-        let table = SweepTable::read(&csv)?;
-        let analysis = SweepAnalysis::new(
-            table,
-            Reference::Exact,
-            Col::WallRolling.name(),
-            &[PUSH_KEY.to_owned()],
-        )?;
-        match analysis.bang.iter().find(|b| b.pooled) {
-            Some(pooled) => print!("{}", pooled.summary(&first, &last)),
-            None => println!("fewer than two runs landed: no ensemble to pool"),
-        }
-        println!("its report: {}", shell_word(&dir.join("report.md")));
+        let pooled = Ensemble::new(&SweepTable::read(&csv)?);
+        write_atomic(&dir.join(ENSEMBLE_CSV), pooled.csv().as_bytes())?;
+        print!("{}", pooled.summary(&first, &last));
+        println!(
+            "Each run's files: {} and on, one folder a push (`uncoil plot` draws one); the \
+             table above: {}; the report: {}",
+            shell_word(&dir.join(run_folder(0))),
+            shell_word(&dir.join(ENSEMBLE_CSV)),
+            shell_word(&dir.join("report.md"))
+        );
     }
     Ok(exit)
+}
+
+/// The pooled table an ensemble writes beside its `sweep.csv`.
+const ENSEMBLE_CSV: &str = "ensemble.csv";
+
+/// An ensemble's folder `dir` is new, or holds only files of the ensemble `grid` (an
+/// earlier call's, which it runs again, or with `--resume` continues): a run's files, or a
+/// sweep's of another grid, would be read as this ensemble's.
+fn ensemble_folder(dir: &Path, grid: &GridFile) -> Result<(), PathError> {
+    paths::out_folder(dir)?;
+    let expected = "an ensemble's folder: new, or one an earlier `--ensemble` of the same \
+                    scene, overrides and N wrote";
+    let refuse = |found: String| Err(PathError::new(dir, found, expected));
+    if let Some(name) = [REPORT, SAMPLES, LOG]
+        .into_iter()
+        .find(|f| dir.join(f).exists())
+    {
+        return refuse(format!("a run's files ({name})"));
+    }
+    let csv = dir.join("sweep.csv");
+    let grid_path = GridFile::beside(&csv);
+    if grid_path.exists() {
+        return match read_grid(&grid_path) {
+            Ok(theirs) if theirs.same_grid(grid) => Ok(()),
+            Ok(theirs) => refuse(format!(
+                "another sweep's files ({}; theirs first, this ensemble's second)",
+                theirs.difference(grid)
+            )),
+            Err(_) => refuse("a sweep.grid.json that is not a sweep's grid".into()),
+        };
+    }
+    if csv.exists() {
+        return refuse("a sweep.csv with no grid beside it".into());
+    }
+    Ok(())
 }
 
 /// What a sweep's end prints, and its exit (see [`sweep`]); `all` says whether it ran the

@@ -5,14 +5,16 @@
 //! on a thread beside the run's.
 
 use std::path::Path;
+use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use crate::output::background::Background;
 use crate::output::folder::{FolderError, LAYOUT, RunFolder, run_id};
 use crate::output::view::{FOXGLOVE_LAYOUT, ViewObserver};
 use crate::output::{CsvObserver, ReportObserver};
-use crate::run::{Observer, RunReport, run_until};
+use crate::run::{Observer, RunReport, run_until_with};
 use crate::scene::Scene;
+use crate::theory::References;
 
 /// Whether a run has a Foxglove view, and whether it is written to `run.mcap`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -91,13 +93,26 @@ impl RunFiles {
         first: Option<&'a mut dyn Observer>,
         stop: &AtomicBool,
     ) -> anyhow::Result<RunReport> {
+        self.run_with(scene, None, first, stop)
+    }
+
+    /// [`RunFiles::run`] with the scene's references, if already built (by a sweep while
+    /// its previous run stepped).
+    pub fn run_with<'a>(
+        &'a mut self,
+        scene: &Scene,
+        refs: Option<Arc<References>>,
+        first: Option<&'a mut dyn Observer>,
+        stop: &AtomicBool,
+    ) -> anyhow::Result<RunReport> {
+        let refs = refs.unwrap_or_else(|| Arc::new(References::new(scene)));
         if self.view.as_ref().is_some_and(ViewObserver::is_live) {
             let mut observers: Vec<&mut dyn Observer> = Vec::with_capacity(4);
             observers.extend(first);
             observers.push(&mut self.csv);
             observers.push(&mut self.report);
             observers.extend(self.view.as_mut().map(|v| v as &mut dyn Observer));
-            return run_until(scene, &mut observers, stop);
+            return run_until_with(scene, refs, &mut observers, stop);
         }
         std::thread::scope(|scope| {
             let mut files: Vec<&mut (dyn Observer + Send)> = vec![&mut self.csv, &mut self.report];
@@ -108,7 +123,7 @@ impl RunFiles {
                 observers.push(first);
             }
             observers.push(&mut background);
-            run_until(scene, &mut observers, stop)
+            run_until_with(scene, refs, &mut observers, stop)
         })
     }
 }

@@ -168,7 +168,7 @@ pub fn chain_summary(scene: &FoldedChain, r: &ChainReport) -> String {
     };
     o.push_str(&format!(
         "Energy at the end, as shares of the {:.6e} J released: kinetic {}, lost {}\n  \
-         floor normal {}, floor friction {}, joints {}, residual {}; numerical (|joints| + \
+         floor impacts {}, floor friction {}, joints {}, residual {}; numerical (|joints| + \
          |residual|) {}\n",
         r.released_j,
         share(r.kinetic_j),

@@ -4,10 +4,11 @@
 //! the Markdown report. Pure `f64` and text; it runs nothing and draws nothing.
 //!
 //! This file holds the analysis and its convergence studies; the power fits and the
-//! Pareto front are in `fit`, the final bang's ensembles in `bang`, the Markdown in
-//! `report`.
+//! Pareto front are in `fit`, the final bang's ensembles in `bang`, one setting's ensemble
+//! pooled in `ensemble`, the Markdown in `report`.
 
 mod bang;
+mod ensemble;
 mod fit;
 mod report;
 
@@ -16,6 +17,7 @@ use std::collections::BTreeMap;
 pub use self::bang::{
     BANG_OBSERVABLES, BangStudy, NUMERICAL, NUMERICAL_MARK, Reading, bang_studies,
 };
+pub use self::ensemble::{Ensemble, Pooled};
 pub use self::fit::{PowerFit, fit_power, is_resolution, pareto_front, step_size};
 
 use crate::study::sweep::{Col, ERR_GEO_PREFIX, RowStatus, STATUS_COLUMN, SweepTable};

@@ -30,13 +30,14 @@ pub use self::grid::{
     Combination, CombinationError, GridFile, Shard, Vary, file_name, grid, scenes,
 };
 pub use self::row::{
-    Col, ERR_EQ7_PREFIX, ERR_GEO_PREFIX, INDEX_COLUMN, RowStatus, STATUS_COLUMN, header,
-    result_cells, result_columns,
+    Col, ERR_EQ7_PREFIX, ERR_GEO_PREFIX, INDEX_COLUMN, RowStatus, STATUS_COLUMN, T_SIM_PREFIX,
+    header, result_cells, result_columns,
 };
 pub use self::table::{Merged, Missing, NotOneSweep, SweepTable, csv_line, merge, write_merged};
 
 use self::grid::settings;
 use self::row::one_line;
+use crate::output::files::{RunFiles, View};
 use crate::run::{RunReport, milestone_radii, run_until, run_until_with};
 use crate::scene::Scene;
 use crate::theory::References;
@@ -78,6 +79,15 @@ pub struct SweepOptions {
     /// `max_time`, `stopped: ...`: a rerun would give the same, the runs being
     /// deterministic) and run only the others (`interrupted`, `failed: ...`, or no row).
     pub resume: bool,
+    /// Each run's own files (`samples.csv`, `report.json`, and with [`View::File`] its
+    /// `run.mcap`) in `DIR/`[`run_folder`]`(index)`, as `uncoil run` writes them; `None`:
+    /// the rows alone.
+    pub run_files: Option<View>,
+}
+
+/// The folder a sweep that keeps its runs' files writes run `index` into, inside its own.
+pub fn run_folder(index: usize) -> String {
+    format!("run-{index}")
 }
 
 impl Default for SweepOptions {
@@ -88,6 +98,7 @@ impl Default for SweepOptions {
             progress: true,
             stop: Arc::new(AtomicBool::new(false)),
             resume: false,
+            run_files: None,
         }
     }
 }
@@ -171,6 +182,8 @@ impl Sweep {
         let pool = worker_pool(opts.jobs)?;
         let runner = Runner {
             sweep: self,
+            dir,
+            run_files: opts.run_files,
             path: &path,
             header: &header,
             labels: &labels,
@@ -300,6 +313,10 @@ fn worker_pool(jobs: Option<usize>) -> anyhow::Result<rayon::ThreadPool> {
 /// the counts.
 struct Runner<'a> {
     sweep: &'a Sweep,
+    /// The sweep's folder.
+    dir: &'a Path,
+    /// Each run's own files, if kept ([`SweepOptions::run_files`]).
+    run_files: Option<View>,
     path: &'a Path,
     header: &'a [String],
     /// The milestones' labels the header's error columns are for.
@@ -358,9 +375,13 @@ impl Runner<'_> {
         let combo = &self.sweep.combos[i];
         let scene = &self.sweep.scenes[i];
         let started = Instant::now();
-        let outcome = catch_unwind(AssertUnwindSafe(|| match refs {
-            Some(refs) => run_until_with(scene, refs, &mut [], self.stop),
-            None => run_until(scene, &mut [], self.stop),
+        let outcome = catch_unwind(AssertUnwindSafe(|| match (self.run_files, refs) {
+            (Some(view), refs) => {
+                let dir = self.dir.join(run_folder(combo.index));
+                RunFiles::take(&dir, scene, view)?.run_with(scene, refs, None, self.stop)
+            }
+            (None, Some(refs)) => run_until_with(scene, refs, &mut [], self.stop),
+            (None, None) => run_until(scene, &mut [], self.stop),
         }));
         let result = match outcome {
             Ok(Ok(report)) => Ok(report),

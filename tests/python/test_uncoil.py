@@ -286,6 +286,10 @@ def test_an_ensemble_lands_from_its_pushes_and_pools_the_shares(tmp_path):
     x = np.asarray(runs["bang_floor_normal_of"])
     mean, se = e["pooled"]["bang_floor_normal_of"]
     assert mean == pytest.approx(x.mean()) and se == pytest.approx(x.std(ddof=1) / 3**0.5)
+    t = np.asarray(runs["t_sim_0.5R"])
+    assert e["milestones"]["0.5R"] == pytest.approx((t.mean(), t.std(ddof=1)))
+    assert list(e["milestones"])[:2] == ["0.75R", "0.5R"]
+    assert list(e["milestones"])[-2:] == ["release", "bang ends"]
     with pytest.raises(ValueError, match="from 2 to 1000"):
         uncoil.ensemble("yoga-mat", n=1)
 

@@ -27,6 +27,7 @@ from . import _uncoil, theory
 from ._uncoil import Scene, SceneError
 
 __all__ = [
+    "BANG_SHARES",
     "RunResult",
     "Scene",
     "SceneError",
@@ -216,15 +217,16 @@ def sweep(
     return {name: _column([row[k] for row in rows]) for k, name in enumerate(header)}
 
 
-#: The bang's shares an ensemble pools (columns of `sweep.csv`, of what the bang dissipated).
-BANG_SHARES = (
-    "bang_floor_normal_of",
-    "bang_floor_friction_of",
-    "bang_layers_normal_of",
-    "bang_layers_friction_of",
-    "bang_freeze_of",
-    "bang_numerical_of",
-)
+#: The bang's shares an ensemble pools (columns of `sweep.csv`, of what the bang dissipated),
+#: each with the name the summary and the reports give its mechanism.
+BANG_SHARES: Dict[str, str] = {
+    "bang_floor_normal_of": "floor impacts",
+    "bang_floor_friction_of": "floor friction",
+    "bang_layers_normal_of": "layers' impacts",
+    "bang_layers_friction_of": "layers' friction",
+    "bang_freeze_of": "freezing",
+    "bang_numerical_of": "numerical",
+}
 
 
 def ensemble(
@@ -240,7 +242,10 @@ def ensemble(
 
     Gives {"runs": the sweep's table by column (as `sweep` gives it), "pooled": {column:
     (mean, standard error of the mean)} for each of `BANG_SHARES` over the runs that ran to
-    their end (status "ok"), "n": how many they were}. Files are written only into `out`.
+    their end (status "ok"), "milestones": {label: (mean, standard deviation)} of the
+    simulated time to each milestone (its `t_sim_<label>` column), the release and the bang's
+    end (s) over the same runs (their spread: the unrolls hardly differ), "n": how many they
+    were}. Files are written only into `out`.
     """
     if not 2 <= n <= 1000:
         raise ValueError(f"n = {n}: the landings of an ensemble, from 2 to 1000")
@@ -259,4 +264,16 @@ def ensemble(
         mean = float(x.mean()) if len(x) else math.nan
         se = float(x.std(ddof=1) / math.sqrt(len(x))) if len(x) > 1 else math.nan
         pooled[column] = (mean, se)
-    return {"runs": runs, "pooled": pooled, "n": int(landed.sum())}
+    times = {c[len("t_sim_"):]: np.asarray(runs[c], dtype=float) for c in runs if c.startswith("t_sim_")}
+    release = np.asarray(runs["bang_time_s"], dtype=float)
+    times["release"] = release
+    times["bang ends"] = release + np.asarray(runs["bang_duration_s"], dtype=float)
+    milestones: Dict[str, Any] = {}
+    for label, t in sorted(times.items(), key=lambda kv: float(np.nanmean(kv[1][landed]))):
+        t = t[landed]
+        t = t[np.isfinite(t)]
+        milestones[label] = (
+            float(t.mean()) if len(t) else math.nan,
+            float(t.std(ddof=1)) if len(t) > 1 else math.nan,
+        )
+    return {"runs": runs, "pooled": pooled, "milestones": milestones, "n": int(landed.sum())}

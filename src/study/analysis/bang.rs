@@ -26,7 +26,7 @@ pub enum Reading {
 pub const BANG_OBSERVABLES: [(&str, Reading); 14] = [
     ("dissipated / kinetic in", Reading::DissipatedOfKineticIn),
     (
-        "floor normal share",
+        "floor impacts share",
         Reading::Column(Col::BangFloorNormalOf),
     ),
     (
@@ -107,29 +107,11 @@ pub struct BangStudy {
 /// pooled ([`BangStudy::pooled`]). Empty if the sweep has no bang columns, or no key takes
 /// two settings and none is a repetition.
 pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
-    let col = |c: Col| table.col(c);
-    let (Some(kin), Some(diss), Some(laid), Some(end), Some(bw), Some(rw), Some(duration)) = (
-        col(Col::BangKineticIn),
-        col(Col::BangDissipated),
-        col(Col::BangLaidLength),
-        col(Col::BangEndX),
-        col(Col::BangWall),
-        col(Col::WallRolling),
-        col(Col::BangDuration),
-    ) else {
+    let Some((values, landed)) = observed(table) else {
         return Vec::new();
     };
     let rows = table.rows.len();
-    let fits = fitting_rows(table).unwrap_or_else(|| vec![true; rows]);
-    let values: Vec<Vec<f64>> = BANG_OBSERVABLES
-        .iter()
-        .map(|(_, reading)| match *reading {
-            Reading::DissipatedOfKineticIn => (0..rows).map(|r| diss[r] / kin[r]).collect(),
-            Reading::ShortOfFlat => (0..rows).map(|r| laid[r] - end[r]).collect(),
-            Reading::CostOfUnroll => (0..rows).map(|r| bw[r] / rw[r]).collect(),
-            Reading::Column(c) => col(c).unwrap_or_else(|| vec![f64::NAN; rows]),
-        })
-        .collect();
+    let landed = |r: usize| landed[r];
     let tied = tied_keys(table);
     // A key varied with another (a function of it) is studied as that key's companion.
     let keys: Vec<String> = table
@@ -138,8 +120,6 @@ pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
         .filter(|k| !repeats.contains(k) && !tied.contains_key(k))
         .collect();
     let cell = |r: usize, k: &str| table.rows[r][table.column(k).expect("a varied key")].clone();
-    // A bang given no time (stop.bang_cap_s = 0) has nothing to say.
-    let landed = |r: usize| fits[r] && kin[r].is_finite() && duration[r] > 0.0;
     let mut studies = Vec::new();
     for key in &keys {
         let Some(vals) = table
@@ -189,6 +169,40 @@ pub fn bang_studies(table: &SweepTable, repeats: &[String]) -> Vec<BangStudy> {
         studies.push(pooled);
     }
     studies
+}
+
+/// Each of [`BANG_OBSERVABLES`] read from every row of `table` (`NaN` where a row lacks
+/// it), and whether each row's bang counts: a run that [fits](super::RowStatus::fits) and
+/// whose bang took time (`stop.bang_cap_s = 0` gives it none, and nothing to say). `None`
+/// if the table has no bang columns.
+pub(super) fn observed(table: &SweepTable) -> Option<(Vec<Vec<f64>>, Vec<bool>)> {
+    let col = |c: Col| table.col(c);
+    let (Some(kin), Some(diss), Some(laid), Some(end), Some(bw), Some(rw), Some(duration)) = (
+        col(Col::BangKineticIn),
+        col(Col::BangDissipated),
+        col(Col::BangLaidLength),
+        col(Col::BangEndX),
+        col(Col::BangWall),
+        col(Col::WallRolling),
+        col(Col::BangDuration),
+    ) else {
+        return None;
+    };
+    let rows = table.rows.len();
+    let fits = fitting_rows(table).unwrap_or_else(|| vec![true; rows]);
+    let values: Vec<Vec<f64>> = BANG_OBSERVABLES
+        .iter()
+        .map(|(_, reading)| match *reading {
+            Reading::DissipatedOfKineticIn => (0..rows).map(|r| diss[r] / kin[r]).collect(),
+            Reading::ShortOfFlat => (0..rows).map(|r| laid[r] - end[r]).collect(),
+            Reading::CostOfUnroll => (0..rows).map(|r| bw[r] / rw[r]).collect(),
+            Reading::Column(c) => col(c).unwrap_or_else(|| vec![f64::NAN; rows]),
+        })
+        .collect();
+    let landed = (0..rows)
+        .map(|r| fits[r] && kin[r].is_finite() && duration[r] > 0.0)
+        .collect();
+    Some((values, landed))
 }
 
 impl BangStudy {
@@ -265,7 +279,7 @@ fn ensemble_study(
 
 /// Mean and standard error of the mean of the finite values (`NaN`s if none; the error is
 /// `NaN` with one).
-fn mean_and_se(values: impl Iterator<Item = f64>) -> (f64, f64) {
+pub(super) fn mean_and_se(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let v: Vec<f64> = values.filter(|x| x.is_finite()).collect();
     let n = v.len() as f64;
     if v.is_empty() {

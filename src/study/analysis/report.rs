@@ -9,30 +9,6 @@ use super::{BANG_OBSERVABLES, BangStudy, NUMERICAL, NUMERICAL_MARK, PowerFit, Sw
 use crate::study::sweep::{INDEX_COLUMN, STATUS_COLUMN, SweepTable};
 
 impl BangStudy {
-    /// A pooled study ([`BangStudy::pooled`]) as plain text: each observable's mean ± the
-    /// standard error of the mean, the shares in percent of what the bang dissipated; the
-    /// pushes ran from `first` to `last` (m/s).
-    pub fn summary(&self, first: &str, last: &str) -> String {
-        let mut o = String::new();
-        let _ = writeln!(
-            o,
-            "The final bang over {} landings (pushes {first}..{last} m/s): each figure the mean \
-             ± the standard error of the mean; shares of what the bang dissipated:",
-            self.n[0]
-        );
-        for (k, (label, reading)) in BANG_OBSERVABLES.iter().enumerate() {
-            let (m, se) = (self.mean[k][0], self.se[k][0]);
-            let text = if label.ends_with("share") {
-                let digits = if *reading == NUMERICAL { 3 } else { 1 };
-                format!("{:.digits$} ± {:.digits$} %", 100.0 * m, 100.0 * se)
-            } else {
-                format!("{} ± {}", sci(m), sci(se))
-            };
-            let _ = writeln!(o, "  {label:<28} {text}");
-        }
-        o
-    }
-
     /// The study as Markdown: one row per setting (mean ± standard error of each
     /// observable), then the fitted order of each observable's change from the finest
     /// setting, and whether that change is within two standard errors.
@@ -137,7 +113,7 @@ impl BangStudy {
 
 /// `mean ± se` with three significant digits.
 /// A number in four significant figures, `-` if not finite.
-fn sci(x: f64) -> String {
+pub(super) fn sci(x: f64) -> String {
     if x.is_finite() {
         format!("{x:.3e}")
     } else {

@@ -358,6 +358,8 @@ impl Col {
 pub const ERR_GEO_PREFIX: &str = "err_geo_";
 /// The prefix of the milestones' time errors against eq. (7): `err_eq7_<label>`.
 pub const ERR_EQ7_PREFIX: &str = "err_eq7_";
+/// The prefix of the milestones' simulated times (s): `t_sim_<label>`.
+pub const T_SIM_PREFIX: &str = "t_sim_";
 
 /// Column names after the varied keys, for a scene's milestone labels.
 pub fn result_columns(milestone_labels: &[String]) -> Vec<String> {
@@ -372,6 +374,11 @@ pub fn result_columns(milestone_labels: &[String]) -> Vec<String> {
         milestone_labels
             .iter()
             .map(|l| format!("{ERR_EQ7_PREFIX}{l}")),
+    );
+    c.extend(
+        milestone_labels
+            .iter()
+            .map(|l| format!("{T_SIM_PREFIX}{l}")),
     );
     c.extend(names(&Col::MID));
     c.extend(names(&Col::BANG));
@@ -424,6 +431,11 @@ pub fn result_cells(report: &RunReport, jobs: usize, labels: &[String]) -> Vec<S
         labels
             .iter()
             .map(|l| opt(milestone(l).and_then(|m| m.err_vs_eq7))),
+    );
+    c.extend(
+        labels
+            .iter()
+            .map(|l| opt(milestone(l).and_then(|m| m.t_sim_s))),
     );
     c.extend(cells(&Col::MID));
     c.extend(cells(&Col::BANG));
