@@ -613,3 +613,59 @@ fn a_physical_key_is_drawn_on_its_own_axis_not_fitted_as_a_step() {
     assert!(svg.contains("floor friction share") && !svg.contains("h of"));
     crate::support::check_legends(&svg);
 }
+
+/// `run --ensemble` stops on SIGTERM as a sweep does (exit 143, no pooled figures from
+/// runs cut short), and `--resume` finishes it: every run's folder complete, the pooled table
+/// written.
+#[test]
+fn sigterm_stops_an_ensemble_and_resume_finishes_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("slow.toml");
+    std::fs::write(
+        &scene,
+        "name = \"slow\"\n[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\nmass_kg = 1.5\n\
+         [push]\ncontact_speed_m_s = 0.3\n[solver]\nmax_dt_s = 0.00001\n\
+         [stop]\nmax_time_s = 2.5\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let args = |resume: bool| {
+        let mut a = vec!["run".to_owned(), scene.display().to_string()];
+        a.extend(["--ensemble", "2", "--no-mcap", "--out"].map(String::from));
+        a.push(out.display().to_string());
+        if resume {
+            a.push("--resume".to_owned());
+        }
+        a
+    };
+    let child = std::process::Command::new(assert_cmd::cargo::cargo_bin("uncoil"))
+        .args(args(false))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let killed = std::process::Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let output = child.wait_with_output().unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(143), "stdout: {stdout}");
+    assert!(!stdout.contains("The final bang over"), "{stdout}");
+    assert!(!out.join("ensemble.csv").exists());
+    uncoil()
+        .args(args(true))
+        .assert()
+        .success()
+        .stdout(predicate::str::contains(
+            "2 of 2 runs (pushes 0.300..0.301 m/s)",
+        ));
+    assert!(out.join("ensemble.csv").exists());
+    for k in 0..2 {
+        let run = out.join(format!("run-{k}"));
+        assert!(run.join("report.json").exists() && run.join("samples.csv").exists());
+        assert!(!run.join("samples.csv.partial").exists());
+    }
+}
