@@ -266,9 +266,10 @@ fn ledger_summary(o: &mut String, report: &RunReport) {
     let pc = |x: f64| 100.0 * x / l.energy_scale_j;
     let _ = writeln!(
         o,
-        "Energy ledger (E0 = {:.4} J; MgR = {:.4} J; flat tape at rest keeps {:.4} J; percentages \
-         of the energy scale S = {:.4} J, the largest of |E0|, MgR and the kinetic energy into the \
-         bang):",
+        "Energy ledger (E0 = {:.4} J; MgR = {:.4} J; flat tape at rest keeps {:.4} J). Three \
+         bases, each named where used: the ledger's percentages are of the energy scale S = {:.4} \
+         J, the largest of |E0|, MgR and the kinetic energy into the bang; the bang's split is in \
+         shares of what the bang dissipated; what is left moving, of what the bang received:",
         l.e0_j, l.mgr_j, l.flat_potential_j, l.energy_scale_j
     );
     let b = &l.before_bang;
