@@ -91,6 +91,32 @@ fn keys_varied_together_a_push_range_and_a_core_make_one_readable_table() {
     }
     let swatches = crate::support::check_legends(&svg);
     assert_eq!(swatches.len(), 2, "{swatches:?}");
+    // The front ranks settings, each at its pushes' means: no push is a setting to choose.
+    let front = &text[text.find("## Pareto front").unwrap()..text.find("## All runs").unwrap()];
+    assert!(front.contains("`push.contact_speed_m_s` pooled"), "{front}");
+    let head = front.lines().find(|l| l.starts_with("| ")).unwrap();
+    assert_eq!(
+        head,
+        "| discretisation.links_per_turn | floor.friction | tape.core_radius_m | \
+         stop.bang_radius_m | runs | cost s | error |"
+    );
+    let err = |r: usize| cell(r, "max_err_geo").parse::<f64>().unwrap();
+    let cost = |r: usize| cell(r, "wall_rolling_s").parse::<f64>().unwrap();
+    let rows: Vec<&str> = front
+        .lines()
+        .filter(|l| l.starts_with("| ") && l != &head && !l.starts_with("|---"))
+        .collect();
+    assert!(!rows.is_empty(), "{front}");
+    for row in rows {
+        let c: Vec<&str> = row.trim_matches('|').split(" | ").map(str::trim).collect();
+        let mine: Vec<usize> = (0..8)
+            .filter(|&r| cell(r, "floor.friction") == c[1] && cell(r, "tape.core_radius_m") == c[2])
+            .collect();
+        assert_eq!(c[4], mine.len().to_string(), "{row}");
+        let mean = |f: &dyn Fn(usize) -> f64| mine.iter().map(|&r| f(r)).sum::<f64>() / 2.0;
+        assert_eq!(c[5], format!("{:.4}", mean(&cost)), "{row}");
+        assert_eq!(c[6], format!("{:.3}%", 100.0 * mean(&err)), "{row}");
+    }
 
     // `none` pools nothing: the pushes are a key of their own.
     let text = report(&out, &["--repeat-key", "none"]);

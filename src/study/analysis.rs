@@ -103,7 +103,18 @@ pub struct SweepAnalysis {
     pub series: Vec<String>,
     /// Keys whose values name the series.
     pub series_keys: Vec<String>,
-    /// Row indices on the Pareto front, by cost.
+    /// Each row's setting: the first row with its settings of the keys that are not
+    /// repetitions (itself where nothing is pooled).
+    pub setting: Vec<usize>,
+    /// Per row, its setting's cost and error: the means over the setting's runs that fit
+    /// (the row's own where nothing is pooled).
+    pub setting_cost: Vec<f64>,
+    /// See [`SweepAnalysis::setting_cost`].
+    pub setting_err: Vec<f64>,
+    /// Per row, how many runs its setting's means are of.
+    pub setting_runs: Vec<usize>,
+    /// The settings on the Pareto front (each by its first row, [`SweepAnalysis::setting`]),
+    /// by cost: a repetition (a push) is never a setting to choose.
     pub front: Vec<usize>,
     /// One study per numeric varied key and setting of the others.
     pub studies: Vec<Study>,
@@ -126,6 +137,68 @@ pub fn fitting_rows(table: &SweepTable) -> Option<Vec<bool>> {
             .map(|r| r[c].parse::<RowStatus>().is_ok_and(|s| s.fits()))
             .collect(),
     )
+}
+
+/// The sweep's settings with its repetitions pooled: per row, the first row of its setting
+/// and the setting's mean cost and error over its runs that fit.
+struct Settings {
+    of: Vec<usize>,
+    cost: Vec<f64>,
+    err: Vec<f64>,
+    runs: Vec<usize>,
+}
+
+impl Settings {
+    fn new(
+        table: &SweepTable,
+        keys: &[String],
+        repeats: &[String],
+        fits: &[bool],
+        cost: &[f64],
+        err: &[f64],
+    ) -> Self {
+        let rows = table.rows.len();
+        let cols: Vec<usize> = keys
+            .iter()
+            .filter(|k| !repeats.contains(k))
+            .filter_map(|k| table.column(k))
+            .collect();
+        let name = |r: usize| {
+            cols.iter()
+                .map(|&c| table.rows[r][c].as_str())
+                .collect::<Vec<_>>()
+        };
+        let mut first: BTreeMap<Vec<&str>, usize> = BTreeMap::new();
+        let of: Vec<usize> = (0..rows)
+            .map(|r| *first.entry(name(r)).or_insert(r))
+            .collect();
+        let mean = |v: &[f64], s: usize| {
+            let x: Vec<f64> = (0..rows)
+                .filter(|&r| of[r] == s && fits[r] && v[r].is_finite())
+                .map(|r| v[r])
+                .collect();
+            (x.iter().sum::<f64>() / x.len() as f64, x.len())
+        };
+        let (mut c, mut e, mut runs) = (vec![f64::NAN; rows], vec![f64::NAN; rows], vec![0; rows]);
+        for r in 0..rows {
+            if repeats.is_empty() {
+                let keep = |v: f64| if fits[r] { v } else { f64::NAN };
+                (c[r], e[r], runs[r]) = (keep(cost[r]), keep(err[r]), usize::from(fits[r]));
+            } else if of[r] == r {
+                let ((mc, n), (me, _)) = (mean(cost, r), mean(err, r));
+                (c[r], e[r], runs[r]) = (mc, me, n);
+            }
+        }
+        for r in 0..rows {
+            (c[r], e[r], runs[r]) = (c[of[r]], e[of[r]], runs[of[r]]);
+        }
+        Self {
+            of,
+            cost: c,
+            err: e,
+            runs,
+        }
+    }
 }
 
 /// Keys that name a series in the Pareto plot when they are varied: the contact model
@@ -162,13 +235,14 @@ impl SweepAnalysis {
             .cloned()
             .collect();
         let series = series_names(&table, &series_keys);
-        let only_fitting = |v: &[f64]| -> Vec<f64> {
-            v.iter()
-                .zip(&ok)
-                .map(|(&x, &fits)| if fits { x } else { f64::NAN })
+        let pooled = Settings::new(&table, &keys, repeats, &ok, &cost, &err);
+        // One point per setting, at its first row; its other rows are no points.
+        let first = |v: &[f64]| -> Vec<f64> {
+            (0..v.len())
+                .map(|r| if pooled.of[r] == r { v[r] } else { f64::NAN })
                 .collect()
         };
-        let front = pareto_front(&only_fitting(&cost), &only_fitting(&err));
+        let front = pareto_front(&first(&pooled.cost), &first(&pooled.err));
         let columns = StudyColumns {
             err: &err,
             lost: &lost,
@@ -189,6 +263,10 @@ impl SweepAnalysis {
             err,
             series,
             series_keys,
+            setting: pooled.of,
+            setting_cost: pooled.cost,
+            setting_err: pooled.err,
+            setting_runs: pooled.runs,
             front,
             studies,
             target: None,

@@ -339,20 +339,34 @@ impl SweepAnalysis {
         }
         if self.front.is_empty() {
             let _ = writeln!(o, "No run reached every milestone.\n");
-        } else {
-            let _ = writeln!(o, "| {} | cost s | error |", keys.join(" | "));
-            let _ = writeln!(o, "|{}---|---|", "---|".repeat(keys.len()));
-            for &r in &self.front {
-                let _ = writeln!(
-                    o,
-                    "| {} | {:.4} | {:.3}% |",
-                    settings_cells(t, keys, r),
-                    self.cost[r],
-                    100.0 * self.err[r]
-                );
-            }
-            let _ = writeln!(o);
+            return o;
         }
+        // A repetition is no setting to choose: each setting is the mean over its runs.
+        let keys: Vec<String> = keys
+            .iter()
+            .filter(|k| !self.repeats.contains(k))
+            .cloned()
+            .collect();
+        if !self.repeats.is_empty() {
+            let _ = writeln!(
+                o,
+                "Each setting's cost and error are the means over its runs (`{}` pooled).\n",
+                self.repeats.join("`, `")
+            );
+        }
+        let _ = writeln!(o, "| {} | runs | cost s | error |", keys.join(" | "));
+        let _ = writeln!(o, "|{}---|---|---|", "---|".repeat(keys.len()));
+        for &r in &self.front {
+            let _ = writeln!(
+                o,
+                "| {} | {} | {:.4} | {:.3}% |",
+                settings_cells(t, &keys, r),
+                self.setting_runs[r],
+                self.setting_cost[r],
+                100.0 * self.setting_err[r]
+            );
+        }
+        let _ = writeln!(o);
         o
     }
 
@@ -431,7 +445,11 @@ impl SweepAnalysis {
                 o,
                 "| {}{} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {} | {} | {} | {} |",
                 t.rows[r][ic],
-                if self.front.contains(&r) { " *" } else { "" },
+                if self.front.contains(&self.setting[r]) {
+                    " *"
+                } else {
+                    ""
+                },
                 settings_cells(t, keys, r),
                 links[r],
                 steps[r],
@@ -444,7 +462,7 @@ impl SweepAnalysis {
                 t.rows[r][sc]
             );
         }
-        let _ = writeln!(o, "\n`*`: on the Pareto front.");
+        let _ = writeln!(o, "\n`*`: of a setting on the Pareto front.");
         o
     }
 }

@@ -112,10 +112,10 @@ fn pareto_plot(path: &Path, a: &SweepAnalysis, title: &str) -> anyhow::Result<()
     let front: Vec<(f64, f64)> = a
         .front
         .iter()
-        .filter(|&&i| a.err[i] > 0.0)
-        .map(|&i| (a.cost[i], a.err[i]))
+        .filter(|&&i| a.setting_err[i] > 0.0)
+        .map(|&i| (a.setting_cost[i], a.setting_err[i]))
         .collect();
-    // Each run on the front ringed, so that a front of one run shows too.
+    // Each setting on the front ringed (at its runs' means), so that a front of one shows too.
     drawn.book(&chart, &front, true, "on the Pareto front".to_owned());
     let ring = BLACK.stroke_width(1);
     chart
