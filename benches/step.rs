@@ -7,12 +7,19 @@
 //! a free chain bent and spinning (`free`, at 100, 1,000 and 10,000 pieces), and the same
 //! chain lying on a floor, sliding (`on-floor`, a contact at every node, at the same sizes).
 //! The chain is rebuilt (untimed) every 200 steps, so it stays in the state it was built in.
+//! And the first step of a tight coil with its thickness (`tight-coil`, 25-200 pieces of
+//! 1 mm, 1 mm thick, wound from a radius of half a thickness, spinning at 100 rad/s; the
+//! property tests' coil, `tests/exact_chain/coil.rs`), rebuilt before every step.
 //!
 //! `cargo bench --bench step` (CI only compiles this file).
 
 use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+
+#[path = "../tests/exact_chain/coil.rs"]
+mod coil;
+use coil::{Coil, coil_chain};
 
 use uncoil::model::exact_chain::{Body, ExactChain, Floor, Joint, tolerance_for};
 use uncoil::model::{Model, Phase};
@@ -156,6 +163,45 @@ fn exact_chain_step(c: &mut Criterion) {
                 });
             });
         }
+    }
+    // A tight coil with its thickness, every turn on the next: its layers' contacts join
+    // pieces far apart along the chain, solved on their Delassus matrix.
+    for n in [25, 50, 100, 200] {
+        group.throughput(Throughput::Elements(n as u64));
+        let coil = Coil {
+            pieces: n,
+            links: 2,
+            thickness_m: 1e-3,
+            spin_rad_s: 100.0,
+            velocity_m_s: [0.0, 0.0],
+            slope: 0.0,
+            friction: 0.5,
+            self_friction: 0.5,
+            turn: 0.15,
+        };
+        // What the step does, said once: whether it met its tolerance, and how hard it tried.
+        let mut chain = coil_chain(&coil);
+        let report = chain
+            .step(coil.turn / coil.spin_rad_s, [0.0, -9.81])
+            .expect("solves");
+        eprintln!(
+            "tight-coil/{n}: {} contacts, {} iterations, tolerance met: {}, deepest overlap \
+             {:.1} % of b",
+            chain.contacts().len(),
+            report.iterations,
+            report.converged,
+            100.0 * report.overlap_m / coil.thickness_m
+        );
+        group.bench_function(BenchmarkId::new("tight-coil", n), |b| {
+            b.iter_batched(
+                || coil_chain(&coil),
+                |mut chain| {
+                    let h = coil.turn / coil.spin_rad_s;
+                    std::hint::black_box(chain.step(h, [0.0, -9.81]).expect("solves"))
+                },
+                criterion::BatchSize::PerIteration,
+            );
+        });
     }
     group.finish();
 }
