@@ -339,6 +339,44 @@ fn sweep(
     Ok((table.header, table.rows))
 }
 
+/// An ensemble's first and last push from `v` (m/s) for `n` landings, as written
+/// ([`ensemble_pushes`](crate::output::summary::ensemble_pushes): `uncoil run --ensemble`'s).
+#[pyfunction]
+fn ensemble_pushes(v: f64, n: usize) -> (String, String) {
+    crate::output::summary::ensemble_pushes(v, n)
+}
+
+/// One pooled quantity as Python gets it: its key, the runs, mean, standard deviation,
+/// standard error, least and greatest.
+type PooledRow = (String, usize, f64, f64, f64, f64, f64);
+
+/// A sweep's table (`header`, `rows`, as [`sweep`] gives them) pooled as one setting's
+/// ensemble ([`Ensemble`](crate::study::analysis::Ensemble)): the milestones' times (by
+/// label, then `release` and `bang ends`) and the bang's observables (by their `sweep.csv`
+/// column where they are one, else by label).
+#[pyfunction]
+fn pool(header: Vec<String>, rows: Vec<Vec<String>>) -> (Vec<PooledRow>, Vec<PooledRow>) {
+    use crate::study::analysis::{BANG_OBSERVABLES, Ensemble, Pooled, Reading};
+    use crate::study::sweep::SweepTable;
+    let e = Ensemble::new(&SweepTable { header, rows });
+    let row = |key: String, p: &Pooled| (key, p.n, p.mean, p.sd, p.se, p.min, p.max);
+    let milestones = e
+        .milestones
+        .iter()
+        .map(|p| row(p.label.clone(), p))
+        .collect();
+    let bang = e
+        .bang
+        .iter()
+        .zip(BANG_OBSERVABLES)
+        .map(|(p, (label, reading))| match reading {
+            Reading::Column(c) => row(c.name().to_owned(), p),
+            _ => row(label.to_owned(), p),
+        })
+        .collect();
+    (milestones, bang)
+}
+
 /// The module `uncoil._uncoil`.
 #[pymodule]
 fn _uncoil(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -349,6 +387,8 @@ fn _uncoil(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(theory, m)?)?;
     m.add_function(wrap_pyfunction!(sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(pool, m)?)?;
+    m.add_function(wrap_pyfunction!(ensemble_pushes, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -130,20 +130,35 @@ fn chain_of(d: &Drawn) -> ExactChain {
     chain
 }
 
-/// The coil's cases: `PROPTEST_CASES` (default 24; the largest coils, of 100 pieces, take
-/// seconds a case: the layers' solve is not linear in the pieces, `docs/final-bang.md`).
-fn coil_cases() -> u32 {
+/// `PROPTEST_CASES`, or `default` cases (the free chain's 64, each stepped 40 times; the
+/// coil's 24: its largest coils, of 100 pieces, take seconds a case, the layers' solve not
+/// being linear in the pieces, `docs/final-bang.md`).
+fn cases(default: u32) -> u32 {
     std::env::var("PROPTEST_CASES")
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(24)
+        .unwrap_or(default)
 }
 
-fn cases() -> u32 {
-    std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(64)
+/// Failing cases are kept in proptest-regressions/exact_chain.txt (commit it) and rerun
+/// first.
+fn config(cases: u32) -> ProptestConfig {
+    ProptestConfig {
+        failure_persistence: Some(Box::new(FileFailurePersistence::Direct(
+            "proptest-regressions/exact_chain.txt",
+        ))),
+        ..ProptestConfig::with_cases(cases)
+    }
+}
+
+/// The fastest spin of the chain's bodies, at least 1 rad/s: the step's turn over it is
+/// the step.
+fn fastest(chain: &ExactChain) -> f64 {
+    chain
+        .bodies()
+        .iter()
+        .map(|b| b.spin_rad_s.abs())
+        .fold(1.0, f64::max)
 }
 
 /// Every coordinate and velocity of the chain's bodies is finite.
@@ -158,26 +173,14 @@ fn finite(chain: &ExactChain) -> bool {
 }
 
 proptest! {
-    // Failing cases are kept in proptest-regressions/exact_chain.txt (commit it) and rerun
-    // first.
-    #![proptest_config(ProptestConfig {
-        failure_persistence: Some(Box::new(FileFailurePersistence::Direct(
-            "proptest-regressions/exact_chain.txt",
-        ))),
-        ..ProptestConfig::with_cases(cases())
-    })]
+    #![proptest_config(config(cases(64)))]
 
     #[test]
     fn a_step_stays_finite_and_closed_or_fails_cleanly(d in drawn()) {
         let mut chain = chain_of(&d);
         for _ in 0..40 {
-            let fastest = chain
-                .bodies()
-                .iter()
-                .map(|b| b.spin_rad_s.abs())
-                .fold(1.0, f64::max);
             let before: Vec<Body> = chain.bodies().to_vec();
-            match chain.step((d.turn / fastest).min(1e-3), [0.0, -9.81]) {
+            match chain.step((d.turn / fastest(&chain)).min(1e-3), [0.0, -9.81]) {
                 Ok(_) => {
                     prop_assert!(finite(&chain), "a value is not finite: {:?}", chain.bodies());
                     let (open, tol) = (chain.joint_gap_m(), chain.position_tolerance_m());
@@ -275,12 +278,7 @@ fn a_chain_dropped_onto_a_table_piles_on_itself_without_crossing() {
     let (mut t, mut deepest, mut missed, mut steps) = (0.0, 0.0_f64, 0, 0);
     // The top falls 0.12 m in 0.16 s: 0.25 s piles all of it.
     while t < 0.25 {
-        let fastest = chain
-            .bodies()
-            .iter()
-            .map(|b| b.spin_rad_s.abs())
-            .fold(1.0, f64::max);
-        let h = (0.1 / fastest).min(1e-4);
+        let h = (0.1 / fastest(&chain)).min(1e-4);
         let report = chain.step(h, [0.0, -9.81]).expect("a step");
         t += h;
         steps += 1;
@@ -365,12 +363,7 @@ fn coil() -> impl Strategy<Value = Coil> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig {
-        failure_persistence: Some(Box::new(FileFailurePersistence::Direct(
-            "proptest-regressions/exact_chain.txt",
-        ))),
-        ..ProptestConfig::with_cases(coil_cases())
-    })]
+    #![proptest_config(config(cases(24)))]
 
     /// A coil with its thickness, 1 to 100 pieces wound as tight as the tape is thick,
     /// spinning up to 1e7 rad/s on a level or sloped floor, stepped at the bang's step
@@ -390,13 +383,8 @@ proptest! {
         let bound = 0.5 * c.thickness_m;
         let mut gravity_work = 0.0;
         for _ in 0..12 {
-            let fastest = chain
-                .bodies()
-                .iter()
-                .map(|b| b.spin_rad_s.abs())
-                .fold(1.0, f64::max);
             let before: Vec<Body> = chain.bodies().to_vec();
-            match chain.step((c.turn / fastest).min(1e-3), gravity) {
+            match chain.step((c.turn / fastest(&chain)).min(1e-3), gravity) {
                 Ok(r) => {
                     prop_assert!(finite(&chain), "a value is not finite");
                     prop_assert!(

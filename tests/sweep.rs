@@ -488,6 +488,29 @@ fn a_key_varied_twice_exits_2_and_runs_nothing() {
     assert!(!dir.path().join("sweep.csv").exists());
 }
 
+/// The yoga mat stepped at 1e-5 s for 2.5 s: about 4 s a run on a 2-core machine.
+const SLOW_SCENE: &str = "name = \"slow\"\n[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\n\
+                          mass_kg = 1.5\n[push]\ncontact_speed_m_s = 0.3\n[solver]\n\
+                          max_dt_s = 0.00001\n[stop]\nmax_time_s = 2.5\n";
+
+/// `uncoil ARGS`, sent SIGTERM half a second in (what Slurm sends at a time limit), run to
+/// its end.
+fn terminated(args: &[String]) -> std::process::Output {
+    let child = std::process::Command::new(assert_cmd::cargo::cargo_bin("uncoil"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let killed = std::process::Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    child.wait_with_output().unwrap()
+}
+
 #[test]
 fn sigterm_stops_a_sweep_its_running_row_says_interrupted_and_resume_finishes_it() {
     // What Slurm sends a task at its time limit or on scancel. Two runs of about 4 s each
@@ -495,13 +518,7 @@ fn sigterm_stops_a_sweep_its_running_row_says_interrupted_and_resume_finishes_it
     // while it runs.
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("slow.toml");
-    std::fs::write(
-        &scene,
-        "name = \"slow\"\n[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\nmass_kg = 1.5\n\
-         [push]\ncontact_speed_m_s = 0.3\n[solver]\nmax_dt_s = 0.00001\n\
-         [stop]\nmax_time_s = 2.5\n",
-    )
-    .unwrap();
+    std::fs::write(&scene, SLOW_SCENE).unwrap();
     let out = dir.path().join("out");
     let args = |resume: bool| {
         let mut a = vec![
@@ -520,19 +537,7 @@ fn sigterm_stops_a_sweep_its_running_row_says_interrupted_and_resume_finishes_it
         }
         a
     };
-    let child = std::process::Command::new(assert_cmd::cargo::cargo_bin("uncoil"))
-        .args(args(false))
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(500));
-    let killed = std::process::Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(killed.success());
-    let output = child.wait_with_output().unwrap();
+    let output = terminated(&args(false));
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(143), "stderr: {stderr}");
     assert!(
@@ -621,13 +626,7 @@ fn a_physical_key_is_drawn_on_its_own_axis_not_fitted_as_a_step() {
 fn sigterm_stops_an_ensemble_and_resume_finishes_it() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("slow.toml");
-    std::fs::write(
-        &scene,
-        "name = \"slow\"\n[tape]\nouter_radius_m = 0.06\nthickness_m = 0.005\nmass_kg = 1.5\n\
-         [push]\ncontact_speed_m_s = 0.3\n[solver]\nmax_dt_s = 0.00001\n\
-         [stop]\nmax_time_s = 2.5\n",
-    )
-    .unwrap();
+    std::fs::write(&scene, SLOW_SCENE).unwrap();
     let out = dir.path().join("out");
     let args = |resume: bool| {
         let mut a = vec!["run".to_owned(), scene.display().to_string()];
@@ -638,19 +637,7 @@ fn sigterm_stops_an_ensemble_and_resume_finishes_it() {
         }
         a
     };
-    let child = std::process::Command::new(assert_cmd::cargo::cargo_bin("uncoil"))
-        .args(args(false))
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(500));
-    let killed = std::process::Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(killed.success());
-    let output = child.wait_with_output().unwrap();
+    let output = terminated(&args(false));
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert_eq!(output.status.code(), Some(143), "stdout: {stdout}");
     assert!(!stdout.contains("The final bang over"), "{stdout}");

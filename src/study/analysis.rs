@@ -4,13 +4,15 @@
 //! the Markdown report. Pure `f64` and text; it runs nothing and draws nothing.
 //!
 //! This file holds the analysis and its convergence studies; the power fits and the
-//! Pareto front are in `fit`, the final bang's ensembles in `bang`, one setting's ensemble
-//! pooled in `ensemble`, the Markdown in `report`.
+//! Pareto front are in `fit`, which rows count and how they group in `rows`, the final
+//! bang's ensembles in `bang`, one setting's ensemble pooled in `ensemble`, the Markdown in
+//! `report`.
 
 mod bang;
 mod ensemble;
 mod fit;
 mod report;
+mod rows;
 
 use std::collections::BTreeMap;
 
@@ -19,8 +21,11 @@ pub use self::bang::{
 };
 pub use self::ensemble::{Ensemble, Pooled};
 pub use self::fit::{PowerFit, fit_power, is_resolution, pareto_front, step_size};
+pub use self::rows::{fitting_rows, tied_keys};
 
-use crate::study::sweep::{Col, ERR_GEO_PREFIX, RowStatus, STATUS_COLUMN, SweepTable};
+use self::rows::Settings;
+
+use crate::study::sweep::{Col, ERR_GEO_PREFIX, STATUS_COLUMN, SweepTable};
 
 /// Which error a report uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -88,8 +93,9 @@ pub struct Study {
 pub struct SweepAnalysis {
     /// The table.
     pub table: SweepTable,
-    /// Whether each row enters the fits, the front and the target ([`RowStatus::fits`]):
-    /// runs that failed, were interrupted or were stopped by a guard are left out.
+    /// Whether each row enters the fits, the front and the target
+    /// ([`RowStatus::fits`](crate::study::sweep::RowStatus::fits)): runs that failed, were
+    /// interrupted or were stopped by a guard are left out.
     pub fits: Vec<bool>,
     /// The error used.
     pub reference: Reference,
@@ -124,81 +130,6 @@ pub struct SweepAnalysis {
     pub repeats: Vec<String>,
     /// The final bang's ensembles, if the sweep has bang columns.
     pub bang: Vec<BangStudy>,
-}
-
-/// Whether each row of a sweep table enters the fits ([`RowStatus::fits`]); `None` if the
-/// table has no status column. A status that does not parse is left out.
-pub fn fitting_rows(table: &SweepTable) -> Option<Vec<bool>> {
-    let c = table.column(STATUS_COLUMN)?;
-    Some(
-        table
-            .rows
-            .iter()
-            .map(|r| r[c].parse::<RowStatus>().is_ok_and(|s| s.fits()))
-            .collect(),
-    )
-}
-
-/// The sweep's settings with its repetitions pooled: per row, the first row of its setting
-/// and the setting's mean cost and error over its runs that fit.
-struct Settings {
-    of: Vec<usize>,
-    cost: Vec<f64>,
-    err: Vec<f64>,
-    runs: Vec<usize>,
-}
-
-impl Settings {
-    fn new(
-        table: &SweepTable,
-        keys: &[String],
-        repeats: &[String],
-        fits: &[bool],
-        cost: &[f64],
-        err: &[f64],
-    ) -> Self {
-        let rows = table.rows.len();
-        let cols: Vec<usize> = keys
-            .iter()
-            .filter(|k| !repeats.contains(k))
-            .filter_map(|k| table.column(k))
-            .collect();
-        let name = |r: usize| {
-            cols.iter()
-                .map(|&c| table.rows[r][c].as_str())
-                .collect::<Vec<_>>()
-        };
-        let mut first: BTreeMap<Vec<&str>, usize> = BTreeMap::new();
-        let of: Vec<usize> = (0..rows)
-            .map(|r| *first.entry(name(r)).or_insert(r))
-            .collect();
-        let mean = |v: &[f64], s: usize| {
-            let x: Vec<f64> = (0..rows)
-                .filter(|&r| of[r] == s && fits[r] && v[r].is_finite())
-                .map(|r| v[r])
-                .collect();
-            (x.iter().sum::<f64>() / x.len() as f64, x.len())
-        };
-        let (mut c, mut e, mut runs) = (vec![f64::NAN; rows], vec![f64::NAN; rows], vec![0; rows]);
-        for r in 0..rows {
-            if repeats.is_empty() {
-                let keep = |v: f64| if fits[r] { v } else { f64::NAN };
-                (c[r], e[r], runs[r]) = (keep(cost[r]), keep(err[r]), usize::from(fits[r]));
-            } else if of[r] == r {
-                let ((mc, n), (me, _)) = (mean(cost, r), mean(err, r));
-                (c[r], e[r], runs[r]) = (mc, me, n);
-            }
-        }
-        for r in 0..rows {
-            (c[r], e[r], runs[r]) = (c[of[r]], e[of[r]], runs[of[r]]);
-        }
-        Self {
-            of,
-            cost: c,
-            err: e,
-            runs,
-        }
-    }
 }
 
 /// Keys that name a series in the Pareto plot when they are varied: the contact model
@@ -305,41 +236,6 @@ impl SweepAnalysis {
         v.sort_by(|&a, &b| self.cost[a].total_cmp(&self.cost[b]));
         v
     }
-}
-
-/// The varied keys that were varied together with an earlier one (`--vary A:B=...`): each
-/// such key mapped to that earlier key, its lead. A key that takes two values or more is
-/// tied to an earlier key whose value fixes its own in every row: a product grid never
-/// gives that (each key's values meet every value of the other), keys varied together
-/// always do (the later ones may repeat a value, as a step shared by two thicknesses).
-pub fn tied_keys(table: &SweepTable) -> BTreeMap<String, String> {
-    let keys = table.varied_keys();
-    let column = |k: &str| -> Vec<&str> {
-        let c = table.column(k).expect("a varied key is a column");
-        table.rows.iter().map(|r| r[c].as_str()).collect()
-    };
-    // Whether `a`'s value fixes `b`'s in every row.
-    let fixes = |a: &[&str], b: &[&str]| {
-        let mut seen: BTreeMap<&str, &str> = BTreeMap::new();
-        a.iter()
-            .zip(b)
-            .all(|(x, y)| *seen.entry(x).or_insert(y) == *y)
-    };
-    let distinct = |v: &[&str]| v.iter().collect::<std::collections::BTreeSet<_>>().len();
-    let mut tied = BTreeMap::new();
-    for (j, follower) in keys.iter().enumerate() {
-        let f = column(follower);
-        if distinct(&f) < 2 {
-            continue;
-        }
-        let lead = keys[..j]
-            .iter()
-            .find(|lead| !tied.contains_key(*lead) && { fixes(&column(lead), &f) });
-        if let Some(lead) = lead {
-            tied.insert(follower.clone(), lead.clone());
-        }
-    }
-    tied
 }
 
 /// The cell of varied key `k` in row `r`.

@@ -19,7 +19,7 @@ import json
 import math
 import os
 import re
-from typing import Any, Dict, List, Mapping, Optional, Union
+from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
 import numpy as np
 
@@ -203,6 +203,17 @@ def sweep(
     together, each value a tuple of theirs ({"tape.thickness_m:solver.bang_piece_m":
     [(0.003, 0.015), (0.001, 0.005)]}).
     """
+    header, rows = _sweep_table(scene, vary, jobs, out)
+    return _columns(header, rows)
+
+
+def _sweep_table(
+    scene: Union[Scene, PathLikeStr],
+    vary: Mapping[str, Any],
+    jobs: Optional[int],
+    out: Optional[PathLikeStr],
+) -> Tuple[List[str], List[List[str]]]:
+    """`sweep.csv`'s header and rows, as text."""
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     pairs = []
@@ -213,7 +224,10 @@ def sweep(
         if isinstance(values, (str, bytes, tuple)) or not hasattr(values, "__iter__"):
             values = [values]
         pairs.append((key, [_setting(v) for v in values]))
-    header, rows = _uncoil.sweep(scene, pairs, jobs, None if out is None else os.fspath(out))
+    return _uncoil.sweep(scene, pairs, jobs, None if out is None else os.fspath(out))
+
+
+def _columns(header: List[str], rows: List[List[str]]) -> Dict[str, Union[np.ndarray, List[str]]]:
     return {name: _column([row[k] for row in rows]) for k, name in enumerate(header)}
 
 
@@ -241,39 +255,24 @@ def ensemble(
     `uncoil run SCENE --ensemble N` does: a landing is chaotic.
 
     Gives {"runs": the sweep's table by column (as `sweep` gives it), "pooled": {column:
-    (mean, standard error of the mean)} for each of `BANG_SHARES` over the runs that ran to
-    their end (status "ok"), "milestones": {label: (mean, standard deviation)} of the
-    simulated time to each milestone (its `t_sim_<label>` column), the release and the bang's
-    end (s) over the same runs (their spread: the unrolls hardly differ), "n": how many they
-    were}. Files are written only into `out`.
+    (mean, standard error of the mean)} for each of `BANG_SHARES` over the runs that landed
+    (ran to their end, their bang given time), "milestones": {label: (mean, standard
+    deviation)} of the simulated time to each milestone (its `t_sim_<label>` column), the
+    release and the bang's end (s) over the runs that ran to their end (their spread: the
+    unrolls hardly differ), "n": how many landed}. The figures are the binary's own, as
+    `ensemble.csv` holds them. Files are written only into `out`.
     """
     if not 2 <= n <= 1000:
         raise ValueError(f"n = {n}: the landings of an ensemble, from 2 to 1000")
     given = dict(overrides or {})
     push = json.loads(load_scene(scene, given).to_json())["push"]["contact_speed_m_s"]
-    decimals = min(max(2 - math.floor(math.log10(push)), 0), 12)
-    pushes = [round(push + k * 10.0 ** -decimals, decimals) for k in range(n)]
+    first, last = _uncoil.ensemble_pushes(push, n)
     vary: Dict[str, Any] = {k: [v] for k, v in given.items() if k != "push.contact_speed_m_s"}
-    vary["push.contact_speed_m_s"] = pushes
-    runs = sweep(scene, vary, jobs=jobs, out=out)
-    landed = np.array([status == "ok" for status in runs["status"]], dtype=bool)
-    pooled: Dict[str, Any] = {}
-    for column in BANG_SHARES:
-        x = np.asarray(runs[column], dtype=float)[landed]
-        x = x[np.isfinite(x)]
-        mean = float(x.mean()) if len(x) else math.nan
-        se = float(x.std(ddof=1) / math.sqrt(len(x))) if len(x) > 1 else math.nan
-        pooled[column] = (mean, se)
-    times = {c[len("t_sim_"):]: np.asarray(runs[c], dtype=float) for c in runs if c.startswith("t_sim_")}
-    release = np.asarray(runs["bang_time_s"], dtype=float)
-    times["release"] = release
-    times["bang ends"] = release + np.asarray(runs["bang_duration_s"], dtype=float)
-    milestones: Dict[str, Any] = {}
-    for label, t in sorted(times.items(), key=lambda kv: float(np.nanmean(kv[1][landed]))):
-        t = t[landed]
-        t = t[np.isfinite(t)]
-        milestones[label] = (
-            float(t.mean()) if len(t) else math.nan,
-            float(t.std(ddof=1)) if len(t) > 1 else math.nan,
-        )
-    return {"runs": runs, "pooled": pooled, "milestones": milestones, "n": int(landed.sum())}
+    vary["push.contact_speed_m_s"] = f"{first}..{last}/{n}"
+    header, rows = _sweep_table(scene, vary, jobs, out)
+    # Pooled by the binary's own arithmetic, the figures `uncoil run --ensemble` prints.
+    times, bang = _uncoil.pool(header, rows)
+    pooled = {key: (mean, se) for key, _, mean, _, se, _, _ in bang if key in BANG_SHARES}
+    milestones = {label: (mean, sd) for label, _, mean, sd, _, _, _ in times}
+    landed = bang[0][1] if bang else 0
+    return {"runs": _columns(header, rows), "pooled": pooled, "milestones": milestones, "n": landed}

@@ -31,3 +31,10 @@ def sweep(
     jobs: Optional[int] = None,
     out: Optional[Union[str, PathLike[str]]] = None,
 ) -> Tuple[List[str], List[List[str]]]: ...
+def pool(
+    header: List[str], rows: List[List[str]]
+) -> Tuple[
+    List[Tuple[str, int, float, float, float, float, float]],
+    List[Tuple[str, int, float, float, float, float, float]],
+]: ...
+def ensemble_pushes(v: float, n: int) -> Tuple[str, str]: ...

@@ -154,11 +154,11 @@ impl Ensemble {
         let _ = writeln!(
             o,
             "{} of {} runs (pushes {first}..{last} m/s) ran to their end. Simulated time to \
-             each milestone, the mean ± the standard deviation of the runs (their spread), and \
-             their least and greatest:",
+             each milestone they reached, the mean ± the standard deviation of the runs (their \
+             spread), and their least and greatest:",
             self.counted, self.runs
         );
-        for p in &self.milestones {
+        for p in self.milestones.iter().filter(|p| p.n > 0) {
             let _ = writeln!(
                 o,
                 "  {:<10} {:>9.4} ± {:.4} s   ({:.4}..{:.4})",
