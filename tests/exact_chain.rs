@@ -19,6 +19,9 @@
 //! than its start plus gravity's work plus the energy guard's tolerance; or it fails
 //! cleanly. Not to 2000 pieces: a tight coil's first step takes 2 s at 100 pieces and 9 s at 200
 //! (`cargo bench --bench step -- tight-coil`, `docs/final-bang.md`).
+//!
+//! And a body whose velocity has diverged stops its step at the layers' search's bound
+//! instead of measuring the whole tape.
 
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
@@ -407,4 +410,61 @@ proptest! {
             }
         }
     }
+}
+
+/// A body whose velocity has diverged (here set to 1e20 m/s beside 40,000 links of laid
+/// tape) would have the layers' search measure every link of the tape, gigabytes of it: the
+/// step stops with `StepError::Unbounded` instead, and leaves the chain as it was.
+#[test]
+fn a_diverged_velocity_stops_the_step_before_its_search_outgrows_the_tape() {
+    use uncoil::model::exact_chain::{Layers, Outline, StepError};
+    let (l, radius, m) = (2e-3, 0.5e-3, 1e-4);
+    let body = |x: f64, speed: f64| Body {
+        mass_kg: m,
+        inertia_kg_m2: m * l * l / 12.0,
+        position_m: [x, 3.0 * radius],
+        angle_rad: 0.0,
+        velocity_m_s: [speed, 0.0],
+        spin_rad_s: 0.0,
+    };
+    let (near, far) = ([-0.5 * l, 0.0], [0.5 * l, 0.0]);
+    let bodies = vec![body(0.0, 0.0), body(l, 1e20)];
+    let joints = vec![Joint {
+        prev: far,
+        next: near,
+    }];
+    let tolerance = Tolerance {
+        position_m: 1e-9 * l,
+        max_iterations: 50,
+        max_turn_rad: 0.3,
+    };
+    let mut chain = ExactChain::new(bodies, joints, None, tolerance);
+    let laid_nodes = 40_000;
+    chain.set_layers(Layers {
+        radius_m: radius,
+        friction: 0.5,
+        exclusion_m: std::f64::consts::FRAC_PI_2 * 2.0 * radius,
+        outlines: (0..2)
+            .map(|i| Outline {
+                nodes: vec![near, far],
+                arc_m: vec![i as f64 * l, (i + 1) as f64 * l],
+            })
+            .collect(),
+        laid: Outline {
+            nodes: (0..laid_nodes)
+                .map(|k| [-(k as f64) * l - l, radius])
+                .collect(),
+            arc_m: (0..laid_nodes).map(|k| (k + 2) as f64 * l).collect(),
+        },
+    });
+    let before = chain.bodies().to_vec();
+    match chain.step(1e-5, [0.0, -9.81]) {
+        Err(StepError::Unbounded { features, reach_m }) => {
+            // Stopped at its bound (65,536 for so few nodes), not at the laid tape's 80,000.
+            assert!((1 << 16..(1 << 16) + 4).contains(&features), "{features}");
+            assert!(reach_m > 1e10, "{reach_m}");
+        }
+        other => panic!("expected the search's bound, got {other:?}"),
+    }
+    assert_eq!(chain.bodies(), &before[..]);
 }

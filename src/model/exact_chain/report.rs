@@ -136,4 +136,18 @@ pub enum StepError {
     /// floor's contacts' modes, never settled.
     #[error("the exact chain's step did not converge, even halved ten times")]
     Unconverged,
+    /// The layers' search found more features than its bound
+    /// (`FEATURES_PER_NODE` a node): a body's reach this step, what its velocity can
+    /// carry it, outgrew the tape, as a velocity that has diverged does.
+    #[error(
+        "the tape's layers would be measured at {features} or more features, a body \
+         reaching {reach_m:.3e} m in one step: the step's velocity diverged, even halved \
+         ten times"
+    )]
+    Unbounded {
+        /// Features found when the search stopped.
+        features: usize,
+        /// The farthest a body's margin reached (m).
+        reach_m: f64,
+    },
 }

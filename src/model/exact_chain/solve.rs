@@ -101,7 +101,7 @@ fn stages(
     may_halve: bool,
 ) -> Result<StepReport, StepError> {
     s.h = h;
-    prepare(chain, s, gravity);
+    prepare(chain, s, gravity)?;
     chain.contacts.clear();
     held_fall(chain, s, h)?;
     modes::gather(chain, s, Impulses::Start(h));
@@ -194,7 +194,7 @@ fn impulses(
         };
         report.iterations += solved.iterations;
         report.converged = solved.converged;
-        if !modes::reach_new_points(chain, s, stage) {
+        if !modes::reach_new_points(chain, s, stage)? {
             break;
         }
     }
@@ -506,8 +506,9 @@ pub(super) fn position_tolerance(chain: &ExactChain) -> f64 {
         .max(4096.0 * f64::EPSILON * largest)
 }
 
-/// The start's velocity and pose, and the inverse masses.
-fn prepare(chain: &ExactChain, s: &mut Scratch, gravity: [f64; 2]) {
+/// The start's velocity and pose, and the inverse masses; the layers' features within
+/// reach, which fails where their search outgrows its bound.
+fn prepare(chain: &ExactChain, s: &mut Scratch, gravity: [f64; 2]) -> Result<(), StepError> {
     s.free.clear();
     s.inv.clear();
     for b in &chain.bodies {
@@ -532,8 +533,9 @@ fn prepare(chain: &ExactChain, s: &mut Scratch, gravity: [f64; 2]) {
     s.layer_start_gaps.clear();
     if chain.layers.is_some() {
         let free = std::mem::take(&mut s.free);
-        modes::find_near(chain, s, s.h, &free);
+        let found = modes::find_near(chain, s, s.h, &free);
         s.free = free;
+        found?;
         modes::measure(chain, s);
         let touches = std::mem::take(&mut s.touches);
         s.layer_start_gaps.extend(
@@ -544,6 +546,7 @@ fn prepare(chain: &ExactChain, s: &mut Scratch, gravity: [f64; 2]) {
         );
         s.touches = touches;
     }
+    Ok(())
 }
 
 /// Keeps the contacts' impulses of the stage just solved, their work, and their impulses as

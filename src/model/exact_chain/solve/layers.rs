@@ -14,8 +14,10 @@
 //! measures those features alone ([`evaluate`]), each in constant time. The search's pairs
 //! come from a sort-and-sweep along `x` over the bodies' bounding boxes, and the laid
 //! tape's links, sorted once by their left ends, by bisection: near linear in the bodies.
+//! A search that finds more than [`FEATURES_PER_NODE`] features for each of the bodies'
+//! nodes stops the step ([`StepError::Unbounded`]): its margins have outgrown the tape.
 
-use super::super::{ExactChain, Layers};
+use super::super::{ExactChain, Layers, StepError};
 use super::rows::Pose;
 
 /// What a contact joins: a node (its owner, and its index in the owner's outline) and a
@@ -26,6 +28,15 @@ pub(in crate::model::exact_chain) struct Key {
     node: [u32; 2],
     link: [u32; 2],
 }
+
+/// The most features a step's search may find for each node of the moving bodies (and at
+/// least 65,536 in all). A margin covers what a body can move in the step, so a velocity
+/// that has diverged (a contact solve gone wrong, a body at 1e20 m/s) would have it measure
+/// every pair of the tape and the laid tape, and take gigabytes. The densest stacks the
+/// shipped and hard scenes measure reach 15-88 a node (yoga-mat 15, thin-tape 15,
+/// hard/thin-300 88): the bound is six times the largest, 8 MB for the thin tape's 1000
+/// nodes.
+pub(in crate::model::exact_chain) const FEATURES_PER_NODE: usize = 512;
 
 /// The laid tape's owner index in a [`Key`].
 const LAID: u32 = u32::MAX;
@@ -160,10 +171,23 @@ impl Search<'_> {
 /// Every node and link of two layers whose faces at `pose` are closer than the two sides'
 /// margins (`margin[i]` body `i`'s, the laid tape's 0), into `out` in the order of their
 /// keys: the features a step measures ([`evaluate`]).
-pub(super) fn near(chain: &ExactChain, pose: &Pose, margin: &[f64], out: &mut Vec<Key>) {
+pub(super) fn near(
+    chain: &ExactChain,
+    pose: &Pose,
+    margin: &[f64],
+    out: &mut Vec<Key>,
+) -> Result<(), StepError> {
     out.clear();
     let Some(layers) = chain.layers.as_ref() else {
-        return;
+        return Ok(());
+    };
+    let nodes: usize = layers.outlines.iter().map(|o| o.nodes.len()).sum();
+    let budget = (FEATURES_PER_NODE * nodes).max(1 << 16);
+    let over = |out: &Vec<Key>| {
+        (out.len() > budget).then(|| StepError::Unbounded {
+            features: out.len(),
+            reach_m: margin.iter().copied().fold(0.0, f64::max),
+        })
     };
     let bodies = chain.bodies.len();
     let mut search = Search {
@@ -204,17 +228,31 @@ pub(super) fn near(chain: &ExactChain, pose: &Pose, margin: &[f64], out: &mut Ve
                 let (na, nb) = (a.nodes.len(), b.nodes.len());
                 search.nodes_on_links((a, 0..na), (b, 0..nb.saturating_sub(1)), out);
                 search.nodes_on_links((b, 0..nb), (a, 0..na.saturating_sub(1)), out);
+                if let Some(e) = over(out) {
+                    return Err(e);
+                }
             }
         }
         open.push(i);
     }
-    near_laid(chain, &search, &boxes, out);
+    near_laid(chain, &search, &boxes, out, budget);
+    if let Some(e) = over(out) {
+        return Err(e);
+    }
     out.sort_unstable();
     out.dedup();
+    Ok(())
 }
 
-/// Each body against the laid tape's links its box overlaps.
-fn near_laid(chain: &ExactChain, search: &Search<'_>, boxes: &[Aabb], out: &mut Vec<Key>) {
+/// Each body against the laid tape's links its box overlaps, until `out` holds more than
+/// `budget` features.
+fn near_laid(
+    chain: &ExactChain,
+    search: &Search<'_>,
+    boxes: &[Aabb],
+    out: &mut Vec<Key>,
+    budget: usize,
+) {
     let layers = search.layers;
     let index = &chain.laid_index;
     let laid = &layers.laid;
@@ -237,6 +275,9 @@ fn near_laid(chain: &ExactChain, search: &Search<'_>, boxes: &[Aabb], out: &mut 
         let body = search.side(i);
         let n = body.nodes.len();
         for &k in &index.order[from..to] {
+            if out.len() > budget {
+                return;
+            }
             let k = k as usize;
             let (q, s) = (laid.nodes[k], laid.nodes[k + 1]);
             let link_box = [

@@ -2,7 +2,7 @@
 //! (`super::layers`) within reach, each with the normal velocity it may leave the stage
 //! with, and the rows it gives.
 
-use super::super::{ExactChain, Surface};
+use super::super::{ExactChain, StepError, Surface};
 use super::layers::{self, Key, Touch};
 use super::rows::{along, dot3};
 use super::{Scratch, position_tolerance};
@@ -256,9 +256,14 @@ pub(super) fn gather(chain: &ExactChain, s: &mut Scratch, stage: Impulses) {
 /// The layers' features a step of `h` measures ([`layers::near`]): every node and link
 /// within what the bodies' velocities `v` can move them this step (twice the drift's
 /// motion at those velocities, [`reaches`]).
-pub(super) fn find_near(chain: &ExactChain, s: &mut Scratch, h: f64, v: &[[f64; 3]]) {
+pub(super) fn find_near(
+    chain: &ExactChain,
+    s: &mut Scratch,
+    h: f64,
+    v: &[[f64; 3]],
+) -> Result<(), StepError> {
     if chain.layers.is_none() {
-        return;
+        return Ok(());
     }
     let tol = position_tolerance(chain);
     s.near_margin = reaches(chain, s, v, h)
@@ -266,9 +271,10 @@ pub(super) fn find_near(chain: &ExactChain, s: &mut Scratch, h: f64, v: &[[f64; 
         .map(|r| r + SLOP * tol)
         .collect();
     let mut near = std::mem::take(&mut s.near);
-    layers::near(chain, &s.start_pose, &s.near_margin, &mut near);
+    let found = layers::near(chain, &s.start_pose, &s.near_margin, &mut near);
     s.near = near;
     s.near_generation += 1;
+    found
 }
 
 /// The layers' touches of the step's features at `s.start_pose`, into `s.touches`: measured
@@ -295,9 +301,13 @@ fn order(a: &Candidate, b: &Candidate) -> std::cmp::Ordering {
 
 /// Adds any contact the step did not expect to reach that would end the drift overlapping:
 /// a floor point below the floor, or a layer's touch; returns whether there was one.
-pub(super) fn reach_new_points(chain: &ExactChain, s: &mut Scratch, stage: Impulses) -> bool {
+pub(super) fn reach_new_points(
+    chain: &ExactChain,
+    s: &mut Scratch,
+    stage: Impulses,
+) -> Result<bool, StepError> {
     let Impulses::Start(h) = stage else {
-        return false;
+        return Ok(false);
     };
     let tol = position_tolerance(chain);
     let slop = SLOP * tol;
@@ -338,7 +348,7 @@ pub(super) fn reach_new_points(chain: &ExactChain, s: &mut Scratch, stage: Impul
         let reach = reaches(chain, s, &s.v, h);
         if reach.iter().zip(&s.near_margin).any(|(r, m)| r > m) {
             let v = s.v.clone();
-            find_near(chain, s, h, &v);
+            find_near(chain, s, h, &v)?;
         }
         let mut known: Vec<Key> = s
             .candidates
@@ -366,7 +376,7 @@ pub(super) fn reach_new_points(chain: &ExactChain, s: &mut Scratch, stage: Impul
     if added {
         s.candidates.sort_by(order);
     }
-    added
+    Ok(added)
 }
 
 /// The deepest a floor point of the step lies below the floor at the step's end (m; 0 if
