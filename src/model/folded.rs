@@ -12,10 +12,12 @@
 use rapier2d_f64::prelude::*;
 
 use super::build::floor_builder;
-use super::exact_chain::{self, Body, ExactChain, Floor, Joint, Pin, SolveStats, StepError};
+use super::exact_chain::{
+    self, Body, ExactChain, Floor, Joint, Layers, Outline, Pin, SolveStats, StepError, Surface,
+};
 use super::work::{BodyState, FloorImpulse, Moved, floor_impulses, step_work};
 use super::{BangLedger, Model};
-use crate::scene::folded::{ChainJoints, FoldedChain};
+use crate::scene::folded::{ChainJoints, FoldedChain, Start};
 
 /// The chain's state after a step.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -28,6 +30,8 @@ pub struct ChainState {
     pub speed_m_s: f64,
     /// The pin's upward impulse on the chain since the start (N s).
     pub pin_impulse_ns: f64,
+    /// The floor's upward impulse on the chain since the start (N s).
+    pub floor_impulse_ns: f64,
     /// Kinetic energy (J).
     pub kinetic_j: f64,
     /// Potential energy released since the start (J).
@@ -64,9 +68,14 @@ impl FoldedModel {
     /// The chain of `scene` at rest in its fold.
     pub fn new(scene: &FoldedChain) -> Self {
         let c = &scene.chain;
-        let (l, m) = (c.link_m(), c.mass_kg / f64::from(c.links));
-        let inertia = m * l * l / 12.0;
-        let nodes = fold_nodes(scene);
+        let (l, m, b) = (c.link_m(), c.mass_kg / f64::from(c.links), c.thickness_m);
+        // A link with a thickness turns as a rod of it (a rectangle l by b; the round ends'
+        // share is left out, as the tape's pieces leave it).
+        let inertia = m * (l * l + b * b) / 12.0;
+        let nodes = match scene.start {
+            Start::Fold => fold_nodes(scene),
+            Start::Hanging { tilt_rad } => hanging_nodes(scene, tilt_rad),
+        };
         let engine = match scene.solver.joints {
             ChainJoints::Exact => Engine::Exact(Box::new(exact_fold(scene, &nodes, m, inertia))),
             _ => rapier_fold(scene, &nodes, m, inertia),
@@ -83,7 +92,7 @@ impl FoldedModel {
         };
         let links = model.links();
         model.potential0_j = model.potential_j(&links);
-        model.state = model.observe(&links, 0.0, 0.0);
+        model.state = model.observe(&links, 0.0, (0.0, 0.0));
         model
     }
 
@@ -104,8 +113,10 @@ impl FoldedModel {
         let before = self.links();
         let energy_before = self.state.kinetic_j - self.state.released_j;
         let g = self.g;
-        // Each contact beside the index of its link along the chain.
+        // Each of the floor's contacts beside the index of its link along the chain; the
+        // work the links' contacts on each other did (normal, friction).
         let mut gravity_work = None;
+        let mut layers = [0.0; 2];
         let contacts: Vec<(usize, FloorImpulse)> = match &mut self.engine {
             Engine::Rapier { world, floor, .. } => {
                 world.step();
@@ -122,7 +133,16 @@ impl FoldedModel {
                 let report = chain.step(dt, [0.0, -g])?;
                 self.solve.add(&report);
                 gravity_work = Some(report.gravity_work_j);
-                chain.contacts().iter().map(exact_chain_impulse).collect()
+                for c in chain.contacts().iter().filter(|c| c.on != Surface::Floor) {
+                    layers[0] += c.work_j[0];
+                    layers[1] += c.work_j[1];
+                }
+                chain
+                    .contacts()
+                    .iter()
+                    .filter(|c| c.on == Surface::Floor)
+                    .map(exact_chain_impulse)
+                    .collect()
             }
         };
         let after = self.links();
@@ -141,7 +161,7 @@ impl FoldedModel {
             &contacts,
             Vector::new(0.0, -g),
             dt,
-            (gravity_work, 0.0),
+            (gravity_work, layers[0] + layers[1]),
         );
         // The chain's momentum balance: the pin's impulse is what gravity and the floor
         // leave of the momentum's change.
@@ -154,14 +174,24 @@ impl FoldedModel {
             .map(|(_, c)| (c.normal + c.friction).y)
             .sum();
         let pin = dp - floor_up + m * after.len() as f64 * g * dt;
-        let mut next = self.observe(&after, self.state.t + dt, self.state.pin_impulse_ns + pin);
+        let impulses = (
+            self.state.pin_impulse_ns + pin,
+            self.state.floor_impulse_ns + floor_up,
+        );
+        let mut next = self.observe(&after, self.state.t + dt, impulses);
         let mut ledger = self.state.ledger;
         ledger.floor_normal_j -= work.normal_j;
         ledger.floor_friction_j -= work.friction_j;
+        ledger.layers_normal_j -= layers[0];
+        ledger.layers_friction_j -= layers[1];
         ledger.joints_j -= work.joints_j;
         let energy_after = next.kinetic_j - next.released_j;
-        ledger.residual_j +=
-            energy_before - energy_after + work.normal_j + work.friction_j + work.joints_j;
+        ledger.residual_j += energy_before - energy_after
+            + work.normal_j
+            + work.friction_j
+            + layers[0]
+            + layers[1]
+            + work.joints_j;
         next.ledger = ledger;
         self.state = next;
         Ok(next)
@@ -197,8 +227,10 @@ impl FoldedModel {
         links.iter().map(|b| m * self.g * b.position_m[1]).sum()
     }
 
-    /// The state at time `t` of `links`, with the pin's impulse `pin` so far and no ledger.
-    fn observe(&self, links: &[Body], t: f64, pin: f64) -> ChainState {
+    /// The state at time `t` of `links`, with the pin's and the floor's impulses so far and
+    /// no ledger. The free end is the last link's far node: the fold's free end, or a
+    /// hanging chain's top.
+    fn observe(&self, links: &[Body], t: f64, (pin, floor): (f64, f64)) -> ChainState {
         let (l, _, _) = self.link;
         let kinetic_j = links.iter().map(Body::kinetic_j).sum();
         let last = links.last().expect("at least four links");
@@ -209,6 +241,7 @@ impl FoldedModel {
             x_m: self.pin_height_m - tip[1],
             speed_m_s: -last.velocity_at(arm)[1],
             pin_impulse_ns: pin,
+            floor_impulse_ns: floor,
             kinetic_j,
             released_j: self.potential0_j - self.potential_j(links),
             ledger: BangLedger::default(),
@@ -254,9 +287,11 @@ pub(super) fn exact_chain_impulse(c: &exact_chain::ContactImpulse) -> (usize, Fl
     )
 }
 
-/// The chain in its fold on the exact chain: each link a body about its centre, pinned at
-/// its first node; on the floor, each link touching it at its far node (its near node is
-/// the pin's or the link before's).
+/// The chain at its start on the exact chain: each link a body about its centre; in its
+/// fold pinned at its first node, hanging free. On the floor each link touches it at its far
+/// node (its near node is the pin's or the link before's; a hanging chain's first link
+/// touches at both). With a thickness, the links are the tape's layers ([`Layers`]): the
+/// floor meets them at their faces, and they meet each other.
 fn exact_fold(scene: &FoldedChain, nodes: &[Vector], m: f64, inertia: f64) -> ExactChain {
     let l = scene.chain.link_m();
     let bodies = nodes
@@ -280,19 +315,41 @@ fn exact_fold(scene: &FoldedChain, nodes: &[Vector], m: f64, inertia: f64) -> Ex
         };
         bodies.len() - 1
     ];
-    let pin = Pin {
+    let pin = (scene.start == Start::Fold).then_some(Pin {
         anchor: [-0.5 * l, 0.0],
         at_m: [nodes[0].x, nodes[0].y],
-    };
+    });
     let n = bodies.len();
-    let mut chain = ExactChain::new(bodies, joints, Some(pin), exact_chain::tolerance_for(l));
+    let mut chain = ExactChain::new(bodies, joints, pin, exact_chain::tolerance_for(l));
+    let (near, far) = ([-0.5 * l, 0.0], [0.5 * l, 0.0]);
     if scene.floor.enabled {
         let floor = Floor {
             point_m: [0.0, 0.0],
             normal: [0.0, 1.0],
             friction: scene.floor.friction,
         };
-        chain.set_floor(floor, &vec![vec![[0.5 * l, 0.0]]; n]);
+        let mut points = vec![vec![far]; n];
+        if pin.is_none() {
+            points[0] = vec![near, far];
+        }
+        chain.set_floor(floor, &points);
+    }
+    let b = scene.chain.thickness_m;
+    if b > 0.0 {
+        chain.set_layers(Layers {
+            radius_m: 0.5 * b,
+            friction: scene.floor.friction,
+            // The tightest fold, a half turn about a link's end, is pi b / 2 long along
+            // the chain's axis: closer points are on the same layer.
+            exclusion_m: std::f64::consts::FRAC_PI_2 * b,
+            outlines: (0..n)
+                .map(|i| Outline {
+                    nodes: vec![near, far],
+                    arc_m: vec![i as f64 * l, (i + 1) as f64 * l],
+                })
+                .collect(),
+            laid: Outline::default(),
+        });
     }
     chain
 }
@@ -418,6 +475,22 @@ fn fold_nodes(scene: &FoldedChain) -> Vec<Vector> {
     for j in (0..half).rev() {
         let p = nodes[j];
         nodes.push(Vector::new(d - p.x, p.y));
+    }
+    nodes
+}
+
+/// The nodes of a hanging chain, from the floor up: the lower end at half the thickness
+/// above it (its face on the floor), each link `tilt_rad` from the vertical, alternately
+/// either way.
+fn hanging_nodes(scene: &FoldedChain, tilt_rad: f64) -> Vec<Vector> {
+    let c = &scene.chain;
+    let l = c.link_m();
+    let (s, co) = tilt_rad.sin_cos();
+    let mut nodes = vec![Vector::new(0.0, 0.5 * c.thickness_m)];
+    for k in 0..c.links as usize {
+        let side = if k % 2 == 0 { 1.0 } else { -1.0 };
+        let p = nodes[k];
+        nodes.push(p + Vector::new(side * l * s, l * co));
     }
     nodes
 }

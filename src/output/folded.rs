@@ -12,8 +12,8 @@ use serde::Serialize;
 use crate::output::folder::{FileStamp, FolderError, REPORT, RunFolder, SAMPLES, run_id};
 use crate::output::table::Table;
 use crate::output::{partial_path, write_atomic};
-use crate::run::folded::{ChainEnd, ChainReport, ChainSample, Crossing, run_chain};
-use crate::scene::folded::{ChainJoints, FoldedChain};
+use crate::run::folded::{CayleyReport, ChainEnd, ChainReport, ChainSample, Crossing, run_chain};
+use crate::scene::folded::{ChainJoints, FoldedChain, Start};
 
 /// What `report.json` holds for a folded chain: the scene as given and what the run found;
 /// Python's run of a chain without files gets the same, less the run's id and files.
@@ -91,17 +91,17 @@ pub fn write_chain_run(
     Ok(report)
 }
 
-/// The readable summary of a folded chain's run.
-pub fn chain_summary(scene: &FoldedChain, r: &ChainReport) -> String {
+/// The summary's first two lines: the chain, its start and floor; the solver and how it did.
+fn heading(scene: &FoldedChain, r: &ChainReport) -> String {
     let c = &scene.chain;
     let s = &scene.solver;
-    let floor = if scene.floor.enabled {
-        format!(
+    let floor = match scene.start {
+        Start::Hanging { .. } => format!("onto a floor (friction {})", scene.floor.friction),
+        Start::Fold if scene.floor.enabled => format!(
             "onto a floor {} m below the pin (friction {})",
             scene.pin_height_m, scene.floor.friction
-        )
-    } else {
-        "no floor".to_owned()
+        ),
+        Start::Fold => "no floor".to_owned(),
     };
     let solver = match s.joints {
         ChainJoints::Exact => format!(
@@ -127,11 +127,33 @@ pub fn chain_summary(scene: &FoldedChain, r: &ChainReport) -> String {
             s.joint_hz,
         ),
     };
-    let mut o = format!(
-        "{}: a folded chain of {} links, L = {} m, M = {} kg, ends {} m apart, {floor}\n\
+    let thick = if c.thickness_m > 0.0 {
+        format!(", {} m thick", c.thickness_m)
+    } else {
+        String::new()
+    };
+    let shape = match scene.start {
+        Start::Fold => format!("a folded chain of {} links{thick}", c.links),
+        Start::Hanging { tilt_rad } => format!(
+            "a hanging chain (Cayley's) of {} links{thick}, tilted {tilt_rad} rad either way",
+            c.links
+        ),
+    };
+    let ends = match scene.start {
+        Start::Fold => format!(", ends {} m apart", c.separation_m),
+        Start::Hanging { .. } => String::new(),
+    };
+    format!(
+        "{}: {shape}, L = {} m, M = {} kg{ends}, {floor}\n\
          solver: {solver}\n",
-        r.name, c.links, c.length_m, c.mass_kg, c.separation_m,
-    );
+        r.name, c.length_m, c.mass_kg,
+    )
+}
+
+/// The readable summary of a folded chain's run.
+pub fn chain_summary(scene: &FoldedChain, r: &ChainReport) -> String {
+    let c = &scene.chain;
+    let mut o = heading(scene, r);
     let end = match r.end {
         ChainEnd::TipFraction => format!("the tip fell {} L", scene.stop.tip_fraction),
         ChainEnd::Rest => "at rest".to_owned(),
@@ -144,19 +166,25 @@ pub fn chain_summary(scene: &FoldedChain, r: &ChainReport) -> String {
         "ended: {end} at t = {:.4} s ({} steps, engine {:.2} s)\n\n",
         r.t_end_s, r.steps, r.wall_time_s
     ));
-    o.push_str("The tip against the closed form (separation 0, energy conserved):\n");
-    o.push_str(&crossing_table(&r.crossings).text("  "));
-    if r.crossings.iter().any(|c| !c.closed_form_applies) {
-        o.push_str(
-            "  * the fold or the tip had reached the floor: the closed form no longer applies\n",
-        );
-    }
     let g = scene.gravity.g_m_s2;
-    o.push_str(&format!(
-        "  closed-form fall time t(L) = {:.5} s = {:.4} sqrt(2L/g)\n\n",
-        r.fall_time_closed_s,
-        r.fall_time_closed_s / (2.0 * c.length_m / g).sqrt()
-    ));
+    match &r.cayley {
+        None => {
+            o.push_str("The tip against the closed form (separation 0, energy conserved):\n");
+            o.push_str(&crossing_table(&r.crossings).text("  "));
+            if r.crossings.iter().any(|c| !c.closed_form_applies) {
+                o.push_str(
+                    "  * the fold or the tip had reached the floor: the closed form no longer \
+                     applies\n",
+                );
+            }
+            o.push_str(&format!(
+                "  closed-form fall time t(L) = {:.5} s = {:.4} sqrt(2L/g)\n\n",
+                r.fall_time_closed_s,
+                r.fall_time_closed_s / (2.0 * c.length_m / g).sqrt()
+            ));
+        }
+        Some(cayley) => o.push_str(&cayley_text(r, cayley)),
+    }
     let l = &r.ledger;
     let lost = r.released_j - r.kinetic_j;
     let share = |v: f64| {
@@ -168,16 +196,58 @@ pub fn chain_summary(scene: &FoldedChain, r: &ChainReport) -> String {
     };
     o.push_str(&format!(
         "Energy at the end, as shares of the {:.6e} J released: kinetic {}, lost {}\n  \
-         floor impacts {}, floor friction {}, joints {}, residual {}; numerical (|joints| + \
+         floor impacts {}, floor friction {}{}, joints {}, residual {}; numerical (|joints| + \
          |residual|) {}\n",
         r.released_j,
         share(r.kinetic_j),
         share(lost),
         share(l.floor_normal_j),
         share(l.floor_friction_j),
+        if c.thickness_m > 0.0 {
+            format!(
+                ", the links' impacts on each other {}, their friction {}",
+                share(l.layers_normal_j),
+                share(l.layers_friction_j)
+            )
+        } else {
+            String::new()
+        },
         share(l.joints_j),
         share(l.residual_j),
         share(l.numerical_j()),
+    ));
+    o
+}
+
+/// Cayley's comparisons: the top against free fall, the table's force against
+/// `3 lambda g x`.
+fn cayley_text(r: &ChainReport, c: &CayleyReport) -> String {
+    let mut o = String::from("The top against free fall (x = g t^2 / 2):\n");
+    o.push_str(&crossing_table(&r.crossings).text("  "));
+    if r.crossings.iter().any(|c| !c.closed_form_applies) {
+        o.push_str("  * the top had reached the pile: free fall no longer applies\n");
+    }
+    let [lag, lead] = c.free_fall_deviation;
+    o.push_str(&format!(
+        "  in flight (x = 0.1 L to {:.3} L), v / sqrt(2 g x) - 1 within {lag:+.1e} .. {lead:+.1e}\n\n",
+        c.flight_fraction
+    ));
+    o.push_str("The table's force against 3 lambda g x (Cayley), impulse over each window:\n");
+    let mut t = Table::new(["x/L", "force / 3 lambda g x"]);
+    for w in &c.table {
+        let note = if w.in_flight { "" } else { " *" };
+        t.push([
+            format!("{}-{}{note}", w.from_fraction, w.to_fraction),
+            format!("{:.3}", w.ratio),
+        ]);
+    }
+    o.push_str(&t.text("  "));
+    if c.table.iter().any(|w| !w.in_flight) {
+        o.push_str("  * the top had reached the pile, which Cayley's has no height\n");
+    }
+    o.push_str(&format!(
+        "  in flight (x = 0.1 L to {:.3} L): {:.3}\n\n",
+        c.flight_fraction, c.flight_ratio
     ));
     o
 }

@@ -1,7 +1,9 @@
 //! The folded chain's run: the engine's chain stepped beside the closed form of its fall
-//! ([`FoldedFall`]), the tip's crossings of the fractions of `L` timed, and the energy
-//! released, the joints' work and the floor's booked there. It times only the engine's
-//! step and writes no file (its samples go to a callback).
+//! ([`FoldedFall`], or Cayley's [`CayleyFall`] for a hanging start), the tip's crossings of
+//! the fractions of `L` timed, and the energy released, the joints' work and the floor's
+//! booked there; for Cayley's chain, the table's force against `3 lambda g x` over windows
+//! of the fall and the top's fall against free fall. It times only the engine's step and
+//! writes no file (its samples go to a callback).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -11,8 +13,8 @@ use serde::{Deserialize, Serialize};
 use crate::model::BangLedger;
 use crate::model::exact_chain::SolveStats;
 use crate::model::folded::{ChainState, FoldedModel};
-use crate::scene::folded::FoldedChain;
-use crate::theory::folded::FoldedFall;
+use crate::scene::folded::{FoldedChain, Start};
+use crate::theory::folded::{CayleyFall, ChainFall, FoldedFall};
 
 /// The fractions of `L` at which the tip's fall is timed.
 pub const FRACTIONS: [f64; 5] = [0.25, 0.5, 0.75, 0.9, 0.95];
@@ -34,6 +36,12 @@ pub struct ChainSample {
     pub pin_force_n: Option<f64>,
     /// The closed form's pin force at the same `x` (N).
     pub pin_force_closed_n: f64,
+    /// The floor's upward force, its mean since the last sample (N; none in the first row,
+    /// 0 without a floor).
+    pub floor_force_n: Option<f64>,
+    /// The closed form's floor force at the same `x`, where it has one: Cayley's
+    /// `3 lambda g x` (N).
+    pub floor_force_closed_n: Option<f64>,
     /// Kinetic energy (J).
     pub kinetic_j: f64,
     /// Potential energy released since the start (J).
@@ -42,6 +50,10 @@ pub struct ChainSample {
     pub floor_normal_j: f64,
     /// ... by the floor's friction (J).
     pub floor_friction_j: f64,
+    /// ... by the links' impacts on each other (J; with a thickness).
+    pub layers_normal_j: f64,
+    /// ... by their friction on each other (J).
+    pub layers_friction_j: f64,
     /// ... by the joints (J; positive = dissipated).
     pub joints_j: f64,
     /// What the split leaves of the energy lost (J).
@@ -70,6 +82,44 @@ pub struct Crossing {
     /// Whether the closed form applies there: no floor, or the fold and the tip still above
     /// it.
     pub closed_form_applies: bool,
+}
+
+/// The fractions of `L` that bound the windows over which Cayley's table force is
+/// compared: from a tenth (the first links' landings are single impacts) to nine tenths
+/// (before the top reaches the pile).
+pub const TABLE_WINDOWS: [f64; 5] = [0.1, 0.3, 0.5, 0.7, 0.9];
+
+/// Cayley's table force over one window of the fall.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TableWindow {
+    /// Where the window starts, as the fraction of `L` the top has fallen.
+    pub from_fraction: f64,
+    /// Where it ends, likewise.
+    pub to_fraction: f64,
+    /// The floor's impulse over the window over the closed form's, `int 3 lambda g x dt`,
+    /// at the run's own `x(t)`.
+    pub ratio: f64,
+    /// Whether the top was still in flight through the whole window (the closed form's
+    /// pile has no height; past the flight the top has landed on a pile that has).
+    pub in_flight: bool,
+}
+
+/// What a hanging chain's run found against Cayley's closed form.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CayleyReport {
+    /// The table's force against `3 lambda g x` in each of [`TABLE_WINDOWS`]' windows the
+    /// top crossed.
+    pub table: Vec<TableWindow>,
+    /// The top's fall against free fall while in flight: the least and the greatest of
+    /// `v / sqrt(2 g x) - 1` from `x = 0.1 L` (past the start, where the chain buckles off
+    /// its lowest link) until the top reaches the pile (its speed first falls below 0.99 of
+    /// free fall's at its `x`). Its speed at its fall, so a delay at the start does not count.
+    pub free_fall_deviation: [f64; 2],
+    /// How far the top had fallen when it reached the pile, as a fraction of `L`.
+    pub flight_fraction: f64,
+    /// The table's impulse over the closed form's from `x = 0.1 L` to the end of the flight:
+    /// the windows' comparison in one figure.
+    pub flight_ratio: f64,
 }
 
 /// Why the chain's run ended.
@@ -119,6 +169,79 @@ pub struct ChainReport {
     /// How the exact chain's steps were solved (all zero on the engine's joints).
     #[serde(default)]
     pub solve: SolveStats,
+    /// Against Cayley's closed form, for a hanging start.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cayley: Option<CayleyReport>,
+}
+
+/// Cayley's comparisons, gathered step by step.
+struct CayleyTally {
+    /// The floor's impulse and the closed form's, in each window (N s).
+    windows: Vec<(f64, f64)>,
+    deviation: [f64; 2],
+    /// Where the top reached the pile, once it has.
+    landed: Option<f64>,
+    /// The floor's impulse and the closed form's in flight from 0.1 L (N s).
+    flight: (f64, f64),
+}
+
+impl CayleyTally {
+    fn new() -> Self {
+        Self {
+            windows: vec![(0.0, 0.0); TABLE_WINDOWS.len() - 1],
+            deviation: [0.0; 2],
+            landed: None,
+            flight: (0.0, 0.0),
+        }
+    }
+
+    /// Books the step from `a` to `b`.
+    fn add(&mut self, fall: &CayleyFall, length: f64, a: &ChainState, b: &ChainState) {
+        let x = 0.5 * (a.x_m + b.x_m);
+        let (got, closed) = (
+            b.floor_impulse_ns - a.floor_impulse_ns,
+            fall.table_force(x) * (b.t - a.t),
+        );
+        if let Some(w) = TABLE_WINDOWS
+            .windows(2)
+            .position(|w| (w[0] * length..w[1] * length).contains(&x))
+        {
+            self.windows[w].0 += got;
+            self.windows[w].1 += closed;
+        }
+        if self.landed.is_none() && x >= TABLE_WINDOWS[0] * length {
+            self.flight.0 += got;
+            self.flight.1 += closed;
+        }
+        if self.landed.is_none() && b.x_m >= TABLE_WINDOWS[0] * length {
+            let d = b.speed_m_s / fall.speed(b.x_m) - 1.0;
+            if d < -0.01 {
+                self.landed = Some(b.x_m / length);
+            } else {
+                self.deviation = [self.deviation[0].min(d), self.deviation[1].max(d)];
+            }
+        }
+    }
+
+    fn report(&self, reached: f64) -> CayleyReport {
+        let flight_fraction = self.landed.unwrap_or(reached);
+        CayleyReport {
+            table: TABLE_WINDOWS
+                .windows(2)
+                .zip(&self.windows)
+                .filter(|(w, _)| reached >= w[1])
+                .map(|(w, &(got, closed))| TableWindow {
+                    from_fraction: w[0],
+                    to_fraction: w[1],
+                    ratio: got / closed,
+                    in_flight: w[1] <= flight_fraction,
+                })
+                .collect(),
+            free_fall_deviation: self.deviation,
+            flight_fraction,
+            flight_ratio: self.flight.0 / self.flight.1,
+        }
+    }
 }
 
 /// Runs `scene`, handing each sample due to `on_sample`, until its stop rule, `max_time_s`
@@ -129,7 +252,13 @@ pub fn run_chain(
     stop: &AtomicBool,
 ) -> anyhow::Result<ChainReport> {
     let c = &scene.chain;
-    let fall = FoldedFall::new(c.length_m, c.mass_kg, scene.gravity.g_m_s2);
+    let g = scene.gravity.g_m_s2;
+    let fall = match scene.start {
+        Start::Fold => ChainFall::Folded(FoldedFall::new(c.length_m, c.mass_kg, g)),
+        Start::Hanging { .. } => ChainFall::Cayley(CayleyFall::new(c.length_m, c.mass_kg, g)),
+    };
+    let mut cayley = matches!(fall, ChainFall::Cayley(_)).then(CayleyTally::new);
+    let mut reached = 0.0_f64;
     let mut model = FoldedModel::new(scene);
     let mut prev = model.state();
     on_sample(&sample(&fall, &prev, &prev))?;
@@ -148,6 +277,10 @@ pub fn run_chain(
             break ChainEnd::Unsolved;
         };
         steps += 1;
+        if let (Some(tally), ChainFall::Cayley(f)) = (&mut cayley, &fall) {
+            tally.add(f, c.length_m, &prev, &s);
+        }
+        reached = reached.max(s.x_m / c.length_m);
         if ![s.x_m, s.speed_m_s, s.kinetic_j, s.released_j]
             .iter()
             .all(|v| v.is_finite())
@@ -190,12 +323,13 @@ pub fn run_chain(
         kinetic_j: prev.kinetic_j,
         ledger: prev.ledger,
         solve: model.solve_stats(),
+        cayley: cayley.map(|t| t.report(reached)),
     })
 }
 
 /// A sample of `s` beside the closed form at its `x`; the pin's force is its mean since
 /// the sample `last`.
-fn sample(fall: &FoldedFall, last: &ChainState, s: &ChainState) -> ChainSample {
+fn sample(fall: &ChainFall, last: &ChainState, s: &ChainState) -> ChainSample {
     let x = s.x_m.max(0.0);
     let span = s.t - last.t;
     ChainSample {
@@ -205,10 +339,14 @@ fn sample(fall: &FoldedFall, last: &ChainState, s: &ChainState) -> ChainSample {
         speed_closed_m_s: fall.speed(x),
         pin_force_n: (span > 0.0).then(|| (s.pin_impulse_ns - last.pin_impulse_ns) / span),
         pin_force_closed_n: fall.pin_force(x),
+        floor_force_n: (span > 0.0).then(|| (s.floor_impulse_ns - last.floor_impulse_ns) / span),
+        floor_force_closed_n: fall.floor_force(x),
         kinetic_j: s.kinetic_j,
         released_j: s.released_j,
         floor_normal_j: s.ledger.floor_normal_j,
         floor_friction_j: s.ledger.floor_friction_j,
+        layers_normal_j: s.ledger.layers_normal_j,
+        layers_friction_j: s.ledger.layers_friction_j,
         joints_j: s.ledger.joints_j,
         residual_j: s.ledger.residual_j,
     }
@@ -217,7 +355,7 @@ fn sample(fall: &FoldedFall, last: &ChainState, s: &ChainState) -> ChainSample {
 /// The crossing of `fraction` of `L` between the states `a` and `b`, linear in `x`.
 fn crossing(
     scene: &FoldedChain,
-    fall: &FoldedFall,
+    fall: &ChainFall,
     fraction: f64,
     a: &ChainState,
     b: &ChainState,
@@ -242,6 +380,10 @@ fn crossing(
         released_j: at(a.released_j, b.released_j),
         joints_j: at(a.ledger.joints_j, b.ledger.joints_j),
         numerical_j: at(numerical(a), numerical(b)),
-        closed_form_applies: !scene.floor.enabled || (0.5 * (length + x) < h && x < h),
+        closed_form_applies: match scene.start {
+            Start::Fold => !scene.floor.enabled || (0.5 * (length + x) < h && x < h),
+            // Until the top reaches the pile.
+            Start::Hanging { .. } => b.speed_m_s >= 0.99 * fall.speed(b.x_m),
+        },
     }
 }

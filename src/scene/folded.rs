@@ -8,6 +8,11 @@
 //! rising to the free end at `(separation_m, pin.height_m)`; the two lowest links meet at
 //! the fold, tilted to span the separation (so `0 <= separation_m <= 2 l`). The plane
 //! `y = 0` is the floor, solid when `floor.enabled`.
+//!
+//! Or, with `start.shape = "hanging"`, Cayley's chain: upright from the floor, its links
+//! tilted `start.tilt_rad` alternately either way, let go at rest (no pin). With
+//! `chain.thickness_m` the links meet the floor at their faces and each other as the tape's
+//! layers do (the exact chain only).
 
 use serde::{Deserialize, Serialize};
 
@@ -26,6 +31,9 @@ pub const FOLDED_KEYS: &[&str] = &[
     "chain.links",
     "chain.mass_kg",
     "chain.separation_m",
+    "chain.thickness_m",
+    "start.shape",
+    "start.tilt_rad",
     "pin.height_m",
     "floor.enabled",
     "floor.friction",
@@ -55,7 +63,10 @@ pub struct FoldedChain {
     pub name: String,
     /// The chain (`[chain]`).
     pub chain: Chain,
-    /// Height of the pin above the plane `y = 0` (m; `[pin] height_m`).
+    /// How the chain starts (`[start]`).
+    pub start: Start,
+    /// Height of the pin above the plane `y = 0` (m; `[pin] height_m`); for a hanging
+    /// start, which has no pin, the height of the chain's top at the start.
     pub pin_height_m: f64,
     /// The floor `y = 0` (`[floor]`).
     pub floor: ChainFloor,
@@ -85,6 +96,26 @@ pub struct Chain {
     /// link free to turn. Nearer 0 the free arm starts balanced on the fold, an unstable
     /// equilibrium it leaves only by buckling, and the fall lags the closed form.
     pub separation_m: f64,
+    /// The links' thickness (m, 0 to a link's length). Default 0, a chain of lines: with a
+    /// thickness each link is every point within half of it of its axis, meeting the floor
+    /// at its face and the other links as the tape's layers meet (the exact chain only), and
+    /// its rotary inertia is `m (l^2 + b^2) / 12`.
+    pub thickness_m: f64,
+}
+
+/// How the chain starts (`[start]`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Start {
+    /// `shape = "fold"`: hanging from the pin in its fold, the free end released level with
+    /// the pin. The default.
+    Fold,
+    /// `shape = "hanging"`: Cayley's chain, upright from the floor, each link tilted
+    /// `tilt_rad` from the vertical, alternately either way, released at rest.
+    Hanging {
+        /// Each link's tilt from the vertical (rad, 0..=0.5). Default 0.05.
+        tilt_rad: f64,
+    },
 }
 
 impl Chain {
@@ -170,6 +201,8 @@ struct FoldedFile {
     #[serde(default)]
     chain: ChainFile,
     #[serde(default)]
+    start: StartFile,
+    #[serde(default)]
     pin: PinFile,
     #[serde(default)]
     floor: FloorFile,
@@ -190,12 +223,20 @@ struct ChainFile {
     links: i64,
     mass_kg: f64,
     separation_m: Option<f64>,
+    thickness_m: f64,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, default)]
+struct StartFile {
+    shape: String,
+    tilt_rad: Option<f64>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
 struct PinFile {
-    height_m: f64,
+    height_m: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -243,13 +284,17 @@ impl Default for ChainFile {
             links: 200,
             mass_kg: 0.1,
             separation_m: None,
+            thickness_m: 0.0,
         }
     }
 }
 
-impl Default for PinFile {
+impl Default for StartFile {
     fn default() -> Self {
-        Self { height_m: 1.0 }
+        Self {
+            shape: "fold".into(),
+            tilt_rad: None,
+        }
     }
 }
 
@@ -329,26 +374,16 @@ impl FoldedChain {
     }
 
     fn validate(file: FoldedFile, default_name: &str, text: &str) -> Result<Self, SceneError> {
-        let name = name(file.name, default_name)?;
-        let chain = chain(&file.chain)?;
-        let pin_height_m = positive("pin.height_m", file.pin.height_m, MAX_SIZE_M)?;
+        let start = start(&file)?;
+        let name = name(file.name.clone(), default_name)?;
+        let chain = chain(&file.chain, start)?;
         let friction = check(
             "floor.friction",
             file.floor.friction,
             file.floor.friction >= 0.0,
             "must be >= 0",
         )?;
-        if file.floor.enabled && pin_height_m <= chain.fold_depth_m() {
-            return Err(invalid(
-                "pin.height_m",
-                Shown(pin_height_m),
-                format!(
-                    "the pin is below the world: with the floor enabled it must be above the \
-                     fold's start, {} m below it",
-                    Shown(chain.fold_depth_m())
-                ),
-            ));
-        }
+        let pin_height_m = pin_height(&file, start, &chain)?;
         let g_m_s2 = positive("gravity.g_m_s2", file.gravity.g_m_s2, 1000.0)?;
         let s = &file.solver;
         let solver = ChainSolver {
@@ -402,9 +437,19 @@ impl FoldedChain {
             interval >= 0.0,
             "must be >= 0",
         )?;
+        if (start != Start::Fold || chain.thickness_m > 0.0) && solver.joints != ChainJoints::Exact
+        {
+            return Err(invalid(
+                "solver.joints",
+                format!("{:?}", file.solver.joints),
+                "must be \"exact\" for a hanging start or a chain with a thickness: only the \
+                 exact chain has links that meet each other",
+            ));
+        }
         Ok(Self {
             name,
             chain,
+            start,
             pin_height_m,
             floor: ChainFloor {
                 enabled: file.floor.enabled,
@@ -419,12 +464,90 @@ impl FoldedChain {
     }
 }
 
-/// `[chain]`: length, an even number of links no shorter than [`MIN_LINK_M`], the mass, and
-/// a separation the two lowest links can span.
-fn chain(c: &ChainFile) -> Result<Chain, SceneError> {
+/// The pin's height: in a fold, the file's (default 1 m) above the fold's start where the
+/// floor is solid; a hanging start has no pin, and stands on the floor, which it needs: the
+/// top's height.
+fn pin_height(file: &FoldedFile, start: Start, chain: &Chain) -> Result<f64, SceneError> {
+    Ok(match start {
+        Start::Fold => {
+            let h = positive("pin.height_m", file.pin.height_m.unwrap_or(1.0), MAX_SIZE_M)?;
+            if file.floor.enabled && h <= chain.fold_depth_m() + 0.5 * chain.thickness_m {
+                return Err(invalid(
+                    "pin.height_m",
+                    Shown(h),
+                    format!(
+                        "the pin is below the world: with the floor enabled it must be \
+                         above the fold's start and half the thickness, {} m below it",
+                        Shown(chain.fold_depth_m() + 0.5 * chain.thickness_m)
+                    ),
+                ));
+            }
+            h
+        }
+        Start::Hanging { tilt_rad } => {
+            if let Some(h) = file.pin.height_m {
+                return Err(invalid(
+                    "pin.height_m",
+                    Shown(h),
+                    "a hanging start has no pin: its top is let go with the rest",
+                ));
+            }
+            if !file.floor.enabled {
+                return Err(invalid(
+                    "floor.enabled",
+                    "false",
+                    "a hanging start falls onto the floor: it must be true",
+                ));
+            }
+            0.5 * chain.thickness_m + chain.length_m * tilt_rad.cos()
+        }
+    })
+}
+
+/// `[start]`: the fold, or hanging with a tilt (only there).
+fn start(file: &FoldedFile) -> Result<Start, SceneError> {
+    let st = &file.start;
+    match st.shape.as_str() {
+        "fold" => match st.tilt_rad {
+            Some(t) => Err(invalid(
+                "start.tilt_rad",
+                Shown(t),
+                "only a hanging start is tilted (start.shape = \"hanging\")",
+            )),
+            None => Ok(Start::Fold),
+        },
+        "hanging" => {
+            let t = st.tilt_rad.unwrap_or(0.05);
+            let tilt_rad = check(
+                "start.tilt_rad",
+                t,
+                (0.0..=0.5).contains(&t),
+                "must be >= 0 and <= 0.5",
+            )?;
+            if let Some(d) = file.chain.separation_m {
+                return Err(invalid(
+                    "chain.separation_m",
+                    Shown(d),
+                    "a hanging start has no fold whose ends it separates",
+                ));
+            }
+            Ok(Start::Hanging { tilt_rad })
+        }
+        other => Err(invalid(
+            "start.shape",
+            format!("{other:?}"),
+            "must be \"fold\" or \"hanging\"",
+        )),
+    }
+}
+
+/// `[chain]`: length, a number of links no shorter than [`MIN_LINK_M`] (even in a fold),
+/// the mass, a separation the two lowest links can span, a thickness no more than a link's
+/// length.
+fn chain(c: &ChainFile, start: Start) -> Result<Chain, SceneError> {
     let length_m = positive("chain.length_m", c.length_m, MAX_SIZE_M)?;
     let links = check_int("chain.links", c.links, &(4..=4096))?;
-    if links % 2 != 0 {
+    if links % 2 != 0 && start == Start::Fold {
         return Err(invalid(
             "chain.links",
             links,
@@ -454,69 +577,24 @@ fn chain(c: &ChainFile) -> Result<Chain, SceneError> {
             Shown(2.0 * link_m)
         ),
     )?;
+    let thickness_m = check(
+        "chain.thickness_m",
+        c.thickness_m,
+        (0.0..=link_m).contains(&c.thickness_m),
+        format!(
+            "must be >= 0 and <= a link's length, L / links = {} m: a link thicker than it \
+             is long is not a link",
+            Shown(link_m)
+        ),
+    )?;
     Ok(Chain {
         length_m,
         links,
         mass_kg,
         separation_m,
+        thickness_m,
     })
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn load(extra: &str) -> Result<FoldedChain, SceneError> {
-        FoldedChain::from_toml_str(&format!("kind = \"folded-chain\"\n{extra}"), "test")
-    }
-
-    fn rule(extra: &str) -> String {
-        load(extra).expect_err("must be rejected").to_string()
-    }
-
-    #[test]
-    fn defaults_are_the_benchmark() {
-        let s = load("").unwrap();
-        assert_eq!(s.chain.links, 200);
-        assert!((s.chain.separation_m - 0.01).abs() < 1e-15);
-        assert_eq!(s.name, "test");
-        assert!(!s.floor.enabled);
-        assert!((s.chain.fold_depth_m() - 0.495).abs() < 1e-12);
-    }
-
-    #[test]
-    fn bad_input_names_key_value_and_rule() {
-        assert!(rule("[chain]\nseparation_m = -0.001").starts_with("chain.separation_m = -0.001:"));
-        assert!(rule("[chain]\nseparation_m = 0.5").contains("two links' length"));
-        assert!(rule("[chain]\nlinks = 201").contains("must be even"));
-        assert!(rule("[chain]\nlinks = 2").starts_with("chain.links = 2:"));
-        assert!(rule("[chain]\nlength_m = 1e-4\nlinks = 400").contains("too short for its"));
-        assert!(rule("[pin]\nheight_m = -1").starts_with("pin.height_m = -1:"));
-        assert!(rule("[pin]\nheight_m = 0.3\n[floor]\nenabled = true").contains("below the world"));
-        assert!(rule("[solver]\ndt_s = nan").contains("must be finite"));
-        assert!(rule("[stop]\ntip_fraction = 1").starts_with("stop.tip_fraction = 1:"));
-        assert!(rule("[chain]\nlinkz = 4").starts_with("cannot parse scene test"));
-        assert!(rule("[solver]\njoints = \"ball\"").starts_with("solver.joints = \"ball\":"));
-    }
-
-    #[test]
-    fn the_key_list_is_what_the_file_accepts() {
-        for key in FOLDED_KEYS
-            .iter()
-            .filter(|k| **k != "kind" && **k != "name")
-        {
-            let (section, k) = key.split_once('.').unwrap();
-            let value = match k {
-                "links" | "substeps" | "relax_iterations" => "4",
-                "enabled" => "false",
-                "joints" => "\"multibody\"",
-                "separation_m" => "0",
-                "height_m" => "2.0",
-                "tip_fraction" | "rest_fraction" => "0.5",
-                _ => "0.001",
-            };
-            let text = format!("[{section}]\n{k} = {value}");
-            load(&text).unwrap_or_else(|e| panic!("{key}: {e}"));
-        }
-    }
-}
+mod tests;

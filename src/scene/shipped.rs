@@ -26,6 +26,10 @@ const SHIPPED: &[(&str, &str)] = &[
         "folded-chain",
         include_str!("../../scenes/validation/folded-chain.toml"),
     ),
+    (
+        "cayley-chain",
+        include_str!("../../scenes/validation/cayley-chain.toml"),
+    ),
 ];
 
 /// The hard cases (`scenes/hard/`): each one's name, `hard/` and its file's stem, and its
@@ -137,6 +141,7 @@ mod tests {
             .filter(|p| p.extension().is_some_and(|x| x == "toml"))
             .collect();
         files.push(format!("{dir}/validation/folded-chain.toml").into());
+        files.push(format!("{dir}/validation/cayley-chain.toml").into());
         assert_eq!(files.len(), SHIPPED.len());
         for path in files {
             let stem = path.file_stem().unwrap().to_str().unwrap();
@@ -145,6 +150,7 @@ mod tests {
         }
         assert_eq!(kind(text("yoga-mat").unwrap()), "coil");
         assert_eq!(kind(text("folded-chain").unwrap()), "folded-chain");
+        assert_eq!(kind(text("cayley-chain").unwrap()), "folded-chain");
     }
 
     /// Every hard case of `scenes/hard/` is shipped, as `hard/<stem>`, with its file's text.

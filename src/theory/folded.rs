@@ -105,9 +105,139 @@ impl FoldedFall {
     }
 }
 
+/// Cayley's falling chain: a uniform, perfectly flexible chain of length `L` hanging
+/// straight, its lower end at a table, let go at rest. Nothing pulls the part still in the
+/// air, so its top falls freely, and each element stops dead on the pile. The table then
+/// holds the landed length's weight and takes the momentum that lands each second:
+///
+/// ```text
+/// x = g t^2 / 2,  v^2 = 2 g x,  t(L) = sqrt(2 L / g)
+/// table force = lambda g x + lambda v^2 = 3 lambda g x   (x < L; lambda g L after)
+/// ```
+///
+/// (Cayley 1857; the falling chain of Hamm and Geminard, Am. J. Phys. 78, 828, 2010, whose
+/// chain's top fell faster than g.)
+#[derive(Debug, Clone, Copy)]
+pub struct CayleyFall {
+    length_m: f64,
+    lambda: f64,
+    g: f64,
+}
+
+impl CayleyFall {
+    /// The fall of a chain of `length_m` and `mass_kg` under `g_m_s2`.
+    pub fn new(length_m: f64, mass_kg: f64, g_m_s2: f64) -> Self {
+        Self {
+            length_m,
+            lambda: mass_kg / length_m,
+            g: g_m_s2,
+        }
+    }
+
+    /// The top's speed after falling `x` (m/s).
+    pub fn speed(&self, x: f64) -> f64 {
+        (2.0 * self.g * x.max(0.0)).sqrt()
+    }
+
+    /// The table's upward force after the top has fallen `x` (N).
+    pub fn table_force(&self, x: f64) -> f64 {
+        if x < self.length_m {
+            3.0 * self.lambda * self.g * x.max(0.0)
+        } else {
+            self.lambda * self.g * self.length_m
+        }
+    }
+
+    /// The time at which the top has fallen `x` (s); `None` outside `0..=L`.
+    pub fn time_at(&self, x: f64) -> Option<f64> {
+        (0.0..=self.length_m)
+            .contains(&x)
+            .then(|| (2.0 * x / self.g).sqrt())
+    }
+
+    /// The time the top takes to fall the whole length `L` (s).
+    pub fn fall_time(&self) -> f64 {
+        (2.0 * self.length_m / self.g).sqrt()
+    }
+}
+
+/// The closed form a chain's run is held against: the folded chain's, or Cayley's.
+#[derive(Debug, Clone)]
+pub enum ChainFall {
+    /// The folded chain, its pin holding one end ([`FoldedFall`]).
+    Folded(FoldedFall),
+    /// Cayley's hanging chain falling onto a table ([`CayleyFall`]).
+    Cayley(CayleyFall),
+}
+
+impl ChainFall {
+    /// The free end's speed after falling `x` (m/s).
+    pub fn speed(&self, x: f64) -> f64 {
+        match self {
+            Self::Folded(f) => f.speed(x),
+            Self::Cayley(f) => f.speed(x),
+        }
+    }
+
+    /// The time at which the free end has fallen `x` (s); `None` outside `0..=L`.
+    pub fn time_at(&self, x: f64) -> Option<f64> {
+        match self {
+            Self::Folded(f) => f.time_at(x),
+            Self::Cayley(f) => f.time_at(x),
+        }
+    }
+
+    /// The time the free end takes to fall the whole length (s).
+    pub fn fall_time(&self) -> f64 {
+        match self {
+            Self::Folded(f) => f.fall_time(),
+            Self::Cayley(f) => f.fall_time(),
+        }
+    }
+
+    /// The pin's upward force after the free end has fallen `x` (N; none without a pin).
+    pub fn pin_force(&self, x: f64) -> f64 {
+        match self {
+            Self::Folded(f) => f.pin_force(x),
+            Self::Cayley(_) => 0.0,
+        }
+    }
+
+    /// The floor's upward force after the free end has fallen `x` (N), where the closed
+    /// form has one: Cayley's table.
+    pub fn floor_force(&self, x: f64) -> Option<f64> {
+        match self {
+            Self::Folded(_) => None,
+            Self::Cayley(f) => Some(f.table_force(x)),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn cayleys_table_holds_the_pile_and_stops_what_lands() {
+        let (l, m, g) = (0.5, 0.2, 9.81);
+        let fall = CayleyFall::new(l, m, g);
+        let lambda = m / l;
+        for x in [0.05, 0.2, 0.45] {
+            let t = fall.time_at(x).unwrap();
+            assert!((0.5 * g * t * t / x - 1.0).abs() < 1e-12);
+            // The chain's momentum is the airborne part's, lambda (L - x) v downward; its
+            // rate is the weight less the table's force.
+            let p = |x: f64| lambda * (l - x) * fall.speed(x);
+            let h = 1e-7;
+            let dp_dt = (p(x + h) - p(x - h)) / (2.0 * h) * fall.speed(x);
+            assert!(
+                (m * g - fall.table_force(x) - dp_dt).abs() < 1e-6 * m * g,
+                "x = {x}"
+            );
+        }
+        assert!((fall.table_force(l) - m * g).abs() < 1e-15);
+        assert!(fall.time_at(1.1 * l).is_none());
+    }
 
     #[test]
     fn fall_time_is_0_847_of_free_fall() {
