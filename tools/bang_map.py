@@ -5,7 +5,8 @@
 
 Groups the runs by tape (thickness over radius, core) and friction, the pushes pooled, and
 prints Markdown: per point the runs, how they ended, each share of what the bang dissipated
-(mean ± standard error; a numerical share above 1 % in size marked (!)), what was left
+over the runs that ran to their end (mean ± standard error; a numerical share above 1 % in
+size marked (!)), what was left
 moving, the most energy any run gained above E0 (of the energy scale; the guard stops a run
 at 1e-2) and the mean wall time of a run; then least-squares fits of the friction share against the
 friction coefficient, share = a mu^p, per tape, with their standard errors. Only the
@@ -20,6 +21,8 @@ from collections import defaultdict
 SHARES = [
     ("floor impacts", "bang_floor_normal_of"),
     ("floor friction", "bang_floor_friction_of"),
+    ("layers' impacts", "bang_layers_normal_of"),
+    ("layers' friction", "bang_layers_friction_of"),
     ("freezing", "bang_freeze_of"),
     ("numerical", "bang_numerical_of"),
     ("still moving", "bang_still_moving_of"),
@@ -94,8 +97,11 @@ def main() -> None:
     for (tape, mu), rs in sorted(points.items()):
         cells = []
         marked = False
+        # The shares of the runs that ran to their end: a run a guard stopped in its bang
+        # has booked only part of it.
+        done = [r for r in rs if r["status"] == "ok"]
         for name, col in SHARES:
-            m, s = mean_se([number(r[col]) for r in rs])
+            m, s = mean_se([number(r.get(col, "")) for r in done])
             if name == "numerical" and abs(m) > MARK:
                 marked = True
             cells.append(percent(m, s))
