@@ -86,7 +86,8 @@ pub struct Crossing {
 
 /// The fractions of `L` that bound the windows over which Cayley's table force is
 /// compared: from a tenth (the first links' landings are single impacts) to nine tenths
-/// (before the top reaches the pile).
+/// (a pile of some height is reached before `L`; each window says whether the top was
+/// still in flight through it).
 pub const TABLE_WINDOWS: [f64; 5] = [0.1, 0.3, 0.5, 0.7, 0.9];
 
 /// Cayley's table force over one window of the fall.
