@@ -354,9 +354,19 @@ impl ExactChain {
         &self.vertices[self.vertex_at[i]..self.vertex_at[i + 1]]
     }
 
-    /// The floor's impulses of the last step, contact point by contact point.
+    /// The contacts' impulses of the last step, contact point by contact point: the floor's,
+    /// and the layers' on each other and on the laid tape.
     pub fn contacts(&self) -> &[ContactImpulse] {
         &self.contacts
+    }
+
+    /// The work the layers' contacts did in the last step (J; normal, friction; negative:
+    /// taken from the chain): every contact not on the floor.
+    pub fn layers_work_j(&self) -> [f64; 2] {
+        self.contacts
+            .iter()
+            .filter(|c| c.on != Surface::Floor)
+            .fold([0.0; 2], |w, c| [w[0] + c.work_j[0], w[1] + c.work_j[1]])
     }
 
     /// The position tolerance a step is solved to now: the chain's, or 4096 roundings of its

@@ -133,10 +133,7 @@ impl FoldedModel {
                 let report = chain.step(dt, [0.0, -g])?;
                 self.solve.add(&report);
                 gravity_work = Some(report.gravity_work_j);
-                for c in chain.contacts().iter().filter(|c| c.on != Surface::Floor) {
-                    layers[0] += c.work_j[0];
-                    layers[1] += c.work_j[1];
-                }
+                layers = chain.layers_work_j();
                 chain
                     .contacts()
                     .iter()

@@ -104,16 +104,7 @@ impl Model {
                 .map(|&h| engine_state(&self.world.bodies[h])),
         );
         self.bang.solve = exact.stats;
-        exact.layers_work_j = [0.0; 2];
-        for c in exact
-            .chain
-            .contacts()
-            .iter()
-            .filter(|c| c.on != Surface::Floor)
-        {
-            exact.layers_work_j[0] += c.work_j[0];
-            exact.layers_work_j[1] += c.work_j[1];
-        }
+        exact.layers_work_j = exact.chain.layers_work_j();
         exact
             .chain
             .contacts()
