@@ -262,6 +262,7 @@ impl Model {
                 max_dt: scene.solver.max_dt_s,
                 freeze_speed: scene.solver.freeze_speed_m_s,
                 bang_step_rad: scene.solver.bang_step_rad,
+                bang_tolerance: scene.solver.bang_tolerance,
                 bang_piece_m: scene.solver.bang_piece_m,
                 pin_lift_m: PIN_LIFT_PER_RADIUS * tape.outer_radius_m,
                 joint_softness: SpringCoefficients::new(

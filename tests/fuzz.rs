@@ -37,6 +37,8 @@ fn valid_value(key: &str) -> Option<String> {
         "tape.self_friction" => "1.0",
         // Kept so older files load; the shipped scenes no longer set it.
         "contact.model" => "\"spiral\"",
+        // Off by default; the yoga mat's file shows it commented out.
+        "solver.bang_tolerance" => "1e-3",
         _ => return None,
     };
     Some(default.to_owned())
@@ -124,6 +126,7 @@ fn check_invariants(s: &Scene) -> Result<(), TestCaseError> {
     prop_assert!((1..=1000).contains(&s.solver.bang_iterations));
     prop_assert!((1..=1000).contains(&s.solver.bang_relax_iterations));
     prop_assert!(s.solver.bang_step_rad >= MIN_BANG_STEP_RAD && s.solver.bang_step_rad <= 1.0);
+    prop_assert!(s.solver.bang_tolerance.is_none_or(|t| t > 0.0 && t <= 1.0));
     prop_assert!(s.solver.contact_hz > 0.0 && s.solver.joint_hz > 0.0);
     prop_assert!(s.solver.bang_joint_hz > 0.0 && s.output.scene_rate_hz >= 0.0);
     prop_assert!(!s.name.trim().is_empty());

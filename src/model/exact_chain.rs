@@ -44,7 +44,9 @@
 //! holds the pin's rows (body 0) and the joint to body `i + 1`: a joint touches two
 //! neighbours, so the system is banded. A step whose drift would turn a body by more than
 //! [`Tolerance::max_turn_rad`] (an impact at its start can spin a piece far faster than the
-//! step was chosen for), or whose solve fails, is taken again as two halves.
+//! step was chosen for), or whose solve fails, is taken again as two halves
+//! (`halving.rs`); so, bounded ([`ExactChain::step_bounded`]), is one whose joints do more
+//! work than its bound allows: joints held exactly do none, so that work is its error.
 //!
 //! References: D. Baraff, "Linear-time dynamics using Lagrange multipliers", SIGGRAPH 1996
 //! (the block-tridiagonal solve of a loop-free chain, contacts as auxiliary constraints); H.
@@ -210,10 +212,11 @@ pub fn tolerance_for(length_m: f64) -> Tolerance {
     }
 }
 
+mod halving;
 mod report;
 mod solve;
 
-pub use report::{ContactImpulse, SolveStats, StepError, StepReport, Surface};
+pub use report::{ContactImpulse, ErrorBound, SolveStats, StepError, StepReport, Surface};
 
 /// The chain, its joints, its pin and its floor.
 #[derive(Debug)]
@@ -238,6 +241,17 @@ pub struct ExactChain {
     contacts: Vec<ContactImpulse>,
     /// No step taken yet: the pin, if any, is new (see `solve/rows.rs`).
     fresh: bool,
+    /// Whether the steps are bounded in their joints' error ([`Self::step_bounded`]): then
+    /// a gap the joints start a step with is closed by position, not by the drift's
+    /// velocity, and what a move by position costs the joints is booked apart
+    /// ([`StepReport::projection_j`]), as neither is the step's own error.
+    bounded: bool,
+    /// Where the steps are bounded, the depth of halving a step starts at: one less than the
+    /// deepest part of the last step, so a step grows back by one halving a step and the
+    /// solves a depth it would refuse are not thrown away.
+    start_depth: u32,
+    /// The deepest part of the step being taken.
+    deepest: u32,
     scratch: solve::Scratch,
     system: BlockTridiag,
 }
@@ -274,6 +288,9 @@ impl ExactChain {
             layer_warm: Vec::new(),
             contacts: Vec::new(),
             fresh: true,
+            bounded: false,
+            start_depth: 0,
+            deepest: 0,
             scratch: solve::Scratch::default(),
             system: BlockTridiag::default(),
         }
@@ -407,61 +424,28 @@ impl ExactChain {
     /// tolerances, or that fails, is taken again as two halves, down to 1/1024 of it; the
     /// report sums the halves.
     pub fn step(&mut self, h: f64, gravity: [f64; 2]) -> Result<StepReport, StepError> {
-        self.step_within(h, gravity, 0)
+        self.bounded = false;
+        self.step_within(h, gravity, 0, None)
     }
 
-    /// Whether a step's drift may stand: it closed the joints and turned no body further
-    /// than [`Tolerance::max_turn_rad`]. A step whose drift may not is taken again in halves.
-    fn drift_holds(&self, r: &StepReport) -> bool {
-        r.drift_closed && r.max_turn_rad <= self.tolerance.max_turn_rad
-    }
-
-    fn step_within(
+    /// [`Self::step`], with the joints' error bounded: a step (or a part of one) whose
+    /// joints do work outside `bound` ([`StepReport::joint_error_j`]) is taken again in
+    /// halves as well, the second half bounded by what the first left. Joints held exactly
+    /// do no work, and RATTLE's error in it falls steeply with the step (on the thin tape at
+    /// b/R = 1/100 a step half as long took the bang's joint work from 15 % to 0.1 % of what
+    /// it dissipated: docs/final-bang.md). A step still outside its bound at 1/1024 of its
+    /// length fails ([`StepError::Inaccurate`]).
+    pub fn step_bounded(
         &mut self,
         h: f64,
         gravity: [f64; 2],
-        depth: u32,
+        bound: ErrorBound,
     ) -> Result<StepReport, StepError> {
-        const MAX_DEPTH: u32 = 10;
-        let (bodies, warm) = (self.bodies.clone(), self.warm.clone());
-        let layer_warm = self.layer_warm.clone();
-        let result = solve::step(self, h, gravity, depth < MAX_DEPTH);
-        // A contact solve that missed its tolerance is counted, not halved: a shorter step
-        // does not make a stiff contact set converge. But a step that leaves a joint open
-        // wider than the contacts' slop (the projection out of the floor could not hold
-        // them: a step that took many points deep at once) is taken again in halves.
-        let open = solve::SLOP * self.tolerance.position_m;
-        let fits = |r: &StepReport| self.drift_holds(r) && r.joint_gap_m <= open;
-        match result {
-            Ok(report) if fits(&report) || depth >= MAX_DEPTH => {
-                self.fresh = false;
-                return Ok(report);
-            }
-            Err(e) if depth >= MAX_DEPTH => return Err(e),
-            _ => {}
-        }
-        self.bodies = bodies;
-        self.warm = warm;
-        self.layer_warm = layer_warm;
-        let first = self.step_within(0.5 * h, gravity, depth + 1)?;
-        let contacts = std::mem::take(&mut self.contacts);
-        let second = self.step_within(0.5 * h, gravity, depth + 1)?;
-        let mut all = contacts;
-        all.append(&mut self.contacts);
-        self.contacts = all;
-        Ok(StepReport {
-            iterations: first.iterations + second.iterations,
-            converged: first.converged && second.converged,
-            drift_closed: first.drift_closed && second.drift_closed,
-            joint_gap_m: first.joint_gap_m.max(second.joint_gap_m),
-            penetration_m: first.penetration_m.max(second.penetration_m),
-            overlap_m: first.overlap_m.max(second.overlap_m),
-            gravity_work_j: first.gravity_work_j + second.gravity_work_j,
-            max_turn_rad: first.max_turn_rad.max(second.max_turn_rad),
-            pieces: first.pieces + second.pieces,
-            joint_work_j: [0, 1, 2].map(|k| first.joint_work_j[k] + second.joint_work_j[k]),
-            caught_j: first.caught_j + second.caught_j,
-        })
+        self.bounded = true;
+        self.deepest = 0;
+        let report = self.step_within(h, gravity, 0, Some(bound));
+        self.start_depth = self.deepest.saturating_sub(1);
+        report
     }
 }
 

@@ -19,6 +19,8 @@ pub(super) struct Settings {
     pub(super) max_dt: f64,
     pub(super) freeze_speed: f64,
     pub(super) bang_step_rad: f64,
+    /// The bound on the bang's steps' error, if any (see `Solver::bang_tolerance`).
+    pub(super) bang_tolerance: Option<f64>,
     /// Shortest piece the remaining wound links are grouped into at the release (m).
     pub(super) bang_piece_m: f64,
     /// How far above the floor's contact plane a piece is pinned in the bang (m).

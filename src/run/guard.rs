@@ -10,6 +10,7 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
+use crate::model::exact_chain::StepError;
 use crate::model::{Health, Observation};
 use crate::scene::Scene;
 use crate::spiral::Spiral;
@@ -133,7 +134,11 @@ impl Guard {
             })
         };
         if let Some(e) = health.unsolved {
-            return trip(GuardKind::Unsolved(e.to_string()), 0.0, 0.0);
+            let why = match e {
+                StepError::Inaccurate { .. } => format!("{e} (solver.bang_tolerance)"),
+                _ => e.to_string(),
+            };
+            return trip(GuardKind::Unsolved(why), 0.0, 0.0);
         }
         if let Some(name) = non_finite(obs, health) {
             return trip(GuardKind::NonFinite(name.to_owned()), 0.0, 0.0);

@@ -29,6 +29,7 @@ pub const SCENE_KEYS: &[&str] = &[
     "solver.iterations",
     "solver.freeze_speed_m_s",
     "solver.bang_step_rad",
+    "solver.bang_tolerance",
     "solver.bang_iterations",
     "solver.bang_relax_iterations",
     "solver.bang_piece_m",
@@ -195,6 +196,8 @@ pub(super) struct SolverFile {
     pub(super) iterations: i64,
     pub(super) freeze_speed_m_s: f64,
     pub(super) bang_step_rad: f64,
+    /// `None`: the bang's steps are not bounded in their error.
+    pub(super) bang_tolerance: Option<f64>,
     pub(super) bang_iterations: i64,
     pub(super) bang_relax_iterations: i64,
     /// `None` means "the tape's thickness" (see [`crate::scene::Solver::bang_piece_m`]).
@@ -213,6 +216,7 @@ impl Default for SolverFile {
             iterations: DEFAULT_ITERATIONS,
             freeze_speed_m_s: DEFAULT_FREEZE_SPEED_M_S,
             bang_step_rad: DEFAULT_BANG_STEP_RAD,
+            bang_tolerance: None,
             bang_iterations: DEFAULT_BANG_ITERATIONS,
             bang_relax_iterations: DEFAULT_BANG_RELAX_ITERATIONS,
             bang_piece_m: None,
@@ -432,6 +436,7 @@ mod tests {
                 "output.sample_interval_s" => "0.001",
                 "solver.steps_per_link" | "solver.iterations" => "4",
                 "solver.bang_step_rad" => "0.15",
+                "solver.bang_tolerance" => "1e-3",
                 "solver.bang_iterations" => "24",
                 "solver.bang_relax_iterations" => "1",
                 "solver.bang_piece_m" => "0.005",
@@ -446,8 +451,13 @@ mod tests {
                 "output.scene_rate_hz" => "100",
                 other => panic!("no value for {other}: add it here"),
             };
-            let s = scene_with_overrides(MINIMAL, "t", &[Override::new(key, value)])
+            let mut s = scene_with_overrides(MINIMAL, "t", &[Override::new(key, value)])
                 .unwrap_or_else(|e| panic!("{key} = {value}: {e}"));
+            // The one key whose default is its absence: set, it is the value given.
+            if *key == "solver.bang_tolerance" {
+                assert_eq!(s.solver.bang_tolerance, Some(1e-3));
+                s.solver.bang_tolerance = None;
+            }
             assert_eq!(
                 Scene {
                     source_text: String::new(),

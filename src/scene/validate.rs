@@ -264,6 +264,17 @@ fn solver(s: &SolverFile, tape: &Tape) -> Result<Solver, SceneError> {
             s.bang_step_rad > 0.0 && s.bang_step_rad <= 1.0,
             "must be > 0 and <= 1",
         )?,
+        bang_tolerance: s
+            .bang_tolerance
+            .map(|t| {
+                check(
+                    "solver.bang_tolerance",
+                    t,
+                    t > 0.0 && t <= 1.0,
+                    "must be > 0 and <= 1",
+                )
+            })
+            .transpose()?,
         bang_iterations: check_int(
             "solver.bang_iterations",
             s.bang_iterations,
@@ -392,6 +403,7 @@ mod tests {
             ("solver", "steps_per_link"),
             ("solver", "freeze_speed_m_s"),
             ("solver", "bang_step_rad"),
+            ("solver", "bang_tolerance"),
             ("solver", "bang_piece_m"),
             ("solver", "contact_hz"),
             ("solver", "joint_hz"),
@@ -446,6 +458,9 @@ mod tests {
             ("solver", "freeze_speed_m_s", "-0.001"),
             ("solver", "bang_step_rad", "0.0"),
             ("solver", "bang_step_rad", "1.5"),
+            ("solver", "bang_tolerance", "0.0"),
+            ("solver", "bang_tolerance", "-1e-3"),
+            ("solver", "bang_tolerance", "1.5"),
             ("solver", "contact_hz", "0.0"),
             ("solver", "joint_hz", "-1.0"),
             ("solver", "bang_joint_hz", "0.0"),

@@ -59,6 +59,9 @@ pub struct StepReport {
     pub max_turn_rad: f64,
     /// The pieces the step was taken in: 1, or more where it was halved.
     pub pieces: u32,
+    /// Solves thrown away to take it: 0, or one for each time it, or a part of it, was
+    /// taken again in halves.
+    pub retries: u32,
     /// The joints' work in each stage: the impulses at the start, the drift, the impulses at
     /// the end (J; positive: given to the chain). Where the numerical part is made.
     pub joint_work_j: [f64; 3],
@@ -66,6 +69,66 @@ pub struct StepReport {
     /// rigid: the relative motion its starting velocities had at the joints and the pin (J;
     /// 0 after the first step). It is part of the joints' work in `joint_work_j[0]`.
     pub caught_j: f64,
+    /// The energy the step moved: the work of each stage's joints and of each contact's
+    /// impulse, each counted whole, and the kinetic energy at its start times the turn of
+    /// its fastest body over a whole turn (J, >= 0): the scale of a step's own error,
+    /// which RATTLE makes in proportion to the energy moving and grows with the turn.
+    pub moved_j: f64,
+    /// What holding the drift's velocity to the joints took where the step moved the bodies
+    /// out of the floor or out of each other by position (J; negative: taken from the
+    /// chain): the move's, not the step's, so no shorter step lessens it. Part of the joints'
+    /// work in `joint_work_j[1]`.
+    pub projection_j: f64,
+}
+
+impl StepReport {
+    /// The joints' work in the step, less what they took when they were made rigid
+    /// (`caught_j`, a discard the caller books, not an error): joints held exactly do no
+    /// work, so this is the step's numerical error (J; positive: given to the chain).
+    pub fn joint_error_j(&self) -> f64 {
+        self.joint_work_j.iter().sum::<f64>() + self.caught_j
+    }
+
+    /// The step's own error: its joints' work less what moving the bodies by position took
+    /// (`projection_j`), which a shorter step does not lessen.
+    pub fn step_error_j(&self) -> f64 {
+        self.joint_error_j() - self.projection_j
+    }
+}
+
+/// The joint work a step may do ([`StepReport::joint_error_j`]): a step outside both the
+/// range and its share of the energy it moved is taken again in halves (see
+/// [`super::ExactChain::step_bounded`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ErrorBound {
+    /// The least joint work the step may do (J, <= 0).
+    pub least_j: f64,
+    /// The most (J, >= 0).
+    pub most_j: f64,
+    /// The caller's tolerance: a step whose joints' work is within this share of the
+    /// energy it moved ([`StepReport::moved_j`]) holds whatever the range.
+    pub tolerance: f64,
+}
+
+impl ErrorBound {
+    /// Whether a step's own error ([`StepReport::step_error_j`]) is within the bound: in
+    /// the range, or within the tolerance of the energy the step moved.
+    pub fn holds(&self, r: &StepReport) -> bool {
+        let error_j = r.step_error_j();
+        (self.least_j..=self.most_j).contains(&error_j)
+            || error_j.abs() <= self.tolerance * r.moved_j
+    }
+
+    /// The bound left for the rest of a step whose first part did `spent_j`. The range
+    /// keeps zero in it: a first part within its share of what it moved may have spent
+    /// past the range, and the rest is not asked to give it back.
+    pub fn less(&self, spent_j: f64) -> Self {
+        Self {
+            least_j: (self.least_j - spent_j).min(0.0),
+            most_j: (self.most_j - spent_j).max(0.0),
+            ..*self
+        }
+    }
 }
 
 /// How a run's steps were solved, summed step by step.
@@ -82,6 +145,14 @@ pub struct SolveStats {
     /// Extra pieces steps were halved into (0 if none was).
     #[serde(default)]
     pub halvings: u64,
+    /// Solves thrown away: steps, or parts of steps, taken again in halves (their drift
+    /// did not hold, or their joints' error was outside its bound).
+    #[serde(default)]
+    pub retries: u64,
+    /// What moves by position cost the joints over the steps, where the steps were bounded
+    /// ([`StepReport::projection_j`]), J: part of `joint_work_j[1]`.
+    #[serde(default)]
+    pub projection_j: f64,
     /// The joints' work in each stage over the steps (see [`StepReport::joint_work_j`]), J.
     #[serde(default)]
     pub joint_work_j: [f64; 3],
@@ -102,6 +173,8 @@ impl SolveStats {
         self.max_iterations = self.max_iterations.max(r.iterations);
         self.missed_steps += u64::from(!r.converged);
         self.halvings += u64::from(r.pieces.saturating_sub(1));
+        self.retries += u64::from(r.retries);
+        self.projection_j += r.projection_j;
         for k in 0..3 {
             self.joint_work_j[k] += r.joint_work_j[k];
         }
@@ -149,5 +222,24 @@ pub enum StepError {
         features: usize,
         /// The farthest a body's margin reached (m).
         reach_m: f64,
+    },
+    /// A step's joints did work outside the caller's bound ([`ErrorBound`]) even halved
+    /// ten times.
+    #[error(
+        "a step's joints did {error_j:.3e} J of work, outside the {least_j:.3e}..{most_j:.3e} J \
+         that a tolerance of {tolerance:e} leaves it and over that share of the {moved_j:.3e} J \
+         the step moved, even halved ten times"
+    )]
+    Inaccurate {
+        /// The joints' work in the last piece tried (J).
+        error_j: f64,
+        /// The energy that piece moved (J).
+        moved_j: f64,
+        /// The bound's least (J).
+        least_j: f64,
+        /// The bound's most (J).
+        most_j: f64,
+        /// The tolerance it stood for.
+        tolerance: f64,
     },
 }

@@ -10,11 +10,13 @@ mod delassus;
 mod dense;
 mod layers;
 mod modes;
+mod project;
 mod rows;
 
 pub(super) use layers::{Key, LaidIndex};
 pub(super) use modes::SLOP;
 use modes::{Impulses, Source};
+use project::{close_joints, project_out, realign};
 use rows::{Pose, Row, Stage};
 
 /// The step's working memory, kept from step to step.
@@ -101,6 +103,9 @@ fn stages(
     may_halve: bool,
 ) -> Result<StepReport, StepError> {
     s.h = h;
+    if chain.bounded {
+        close_joints(chain, s)?;
+    }
     prepare(chain, s, gravity)?;
     chain.contacts.clear();
     held_fall(chain, s, h)?;
@@ -135,13 +140,19 @@ fn stages(
         b.angle_rad += h * v[2];
     }
     s.start_pose.take(chain, None);
-    report.converged &= project_out(chain, s)?;
+    let (closed, moved) = project_out(chain, s)?;
+    report.converged &= closed;
     report.joint_gap_m = s.start_pose.joint_gap(chain);
     s.free = kicked(&s.drift, gravity, 0.5 * h);
-    let [first_kick, second_kick] = gravity_work(chain, s, h, gravity);
-    report.gravity_work_j = first_kick + second_kick;
+    let [first_kick, mut second_kick] = gravity_work(chain, s, h, gravity);
     report.joint_work_j[1] =
         kinetic(chain, &s.drift) - kinetic(chain, &s.after_impulses) - first_kick;
+    if moved && chain.bounded {
+        report.projection_j = realign(chain, s, gravity, h)?;
+        report.joint_work_j[1] += report.projection_j;
+        second_kick = gravity_work(chain, s, h, gravity)[1];
+    }
+    report.gravity_work_j = first_kick + second_kick;
     modes::gather(chain, s, Impulses::End);
     let end = impulses(chain, s, Impulses::End)?;
     report.iterations += end.iterations;
@@ -220,10 +231,6 @@ fn held_fall(chain: &mut ExactChain, s: &mut Scratch, h: f64) -> Result<(), Step
     Ok(())
 }
 
-/// A moved contact's row on one body: the body, its point's Jacobian along the normal, and
-/// how far short of its place it is (m).
-type OneBody = (usize, [f64; 3], f64);
-
 /// A chord iteration of the drift must shrink the widest gap at least this many times, or
 /// the next iteration factorises the system again (a full Newton iteration).
 const CHORD_CONTRACTION: f64 = 0.5;
@@ -238,7 +245,9 @@ const CHORD_CONTRACTION: f64 = 0.5;
 /// widest gap is wider than the first's: they are diverging (on the thin tape, 147 of the
 /// 151 drifts that ran to the iteration cap without closing did so, most within 6
 /// iterations, and no drift that closed ever did). Returns the iterations and whether the
-/// gaps closed within the tolerance; the drift's velocity is left in `s.drift`.
+/// gaps closed within the tolerance; the drift's velocity is left in `s.drift`. Where the
+/// steps are bounded, each joint ends the drift with the gap it started the step with
+/// (`rows::joint_opened`), closed by position instead (`project::close_joints`).
 fn drift(
     chain: &mut ExactChain,
     s: &mut Scratch,
@@ -256,7 +265,7 @@ fn drift(
     let mut first_gap = None;
     while !closed && iterations < chain.tolerance.max_iterations {
         s.end_pose.take(chain, Some((&s.v, h)));
-        let gap = s.end_pose.joint_gap(chain);
+        let gap = rows::widest_opened(chain, s);
         if gap <= tol {
             closed = true;
             break;
@@ -280,183 +289,6 @@ fn drift(
     }
     s.drift.clone_from(&s.v);
     Ok((iterations, closed))
-}
-
-/// Moves the bodies, not their velocities, out of the floor and out of each other where the
-/// drift took a contact deeper than the slop (a point moves on an arc over the step, not on
-/// its velocity's line), keeping the joints closed: the mass-weighted least move, by the same
-/// block-tridiagonal solve (a contact between two bodies as an auxiliary row against it,
-/// `delassus::matrix`), a few times over if the move takes others in; whether it converged.
-/// Pushing them out by velocity instead would add their depth over the step to their speed.
-fn project_out(chain: &mut ExactChain, s: &mut Scratch) -> Result<bool, StepError> {
-    if chain.floor.is_none() && chain.layers.is_none() {
-        return Ok(true);
-    }
-    let tol = position_tolerance(chain);
-    let deep_by = SLOP * tol;
-    let mut deep = Deep::default();
-    let mut moved = vec![false; chain.vertices.len()];
-    for _ in 0..chain.tolerance.max_iterations {
-        let grew = deep.find(chain, s, &mut moved, deep_by);
-        if grew {
-            deep.floor.sort_by_key(|d| d.0);
-        }
-        let (rows, pairs) = deep.rows(chain, s);
-        let closed =
-            rows.iter().all(|r| r.2.abs() <= tol) && pairs.iter().all(|p| p.1.abs() <= tol);
-        if closed && s.start_pose.joint_gap(chain) <= tol {
-            return Ok(true);
-        }
-        rows::build_projection(chain, s, &rows);
-        rows::solve(chain, s)?;
-        if pairs.is_empty() {
-            for (r, &y) in s.rows.iter().zip(&s.x) {
-                for a in 0..r.count {
-                    let (b, d) = (r.body[a], r.d[a]);
-                    let w = s.inv[b];
-                    let body = &mut chain.bodies[b];
-                    body.position_m[0] += w[0] * d[0] * y;
-                    body.position_m[1] += w[1] * d[1] * y;
-                    body.angle_rad += w[2] * d[2] * y;
-                }
-            }
-            s.start_pose.take(chain, None);
-            continue;
-        }
-        let mut dq = vec![[0.0; 3]; chain.bodies.len()];
-        for (r, &y) in s.rows.iter().zip(&s.x) {
-            for a in 0..r.count {
-                let (b, d) = (r.body[a], r.d[a]);
-                let w = s.inv[b];
-                for k in 0..3 {
-                    dq[b][k] += w[k] * d[k] * y;
-                }
-            }
-        }
-        let dirs: Vec<delassus::Dir> = pairs.iter().map(|p| p.0).collect();
-        let w = delassus::matrix(chain, s, &dirs);
-        let rhs: Vec<f64> = pairs
-            .iter()
-            .map(|(dir, miss)| miss - dir.speed(&dq))
-            .collect();
-        let p = delassus::push_apart(&w, &rhs);
-        delassus::respond(chain, s, &dirs, &p, true, &mut dq)?;
-        for (body, d) in chain.bodies.iter_mut().zip(&dq) {
-            body.position_m[0] += d[0];
-            body.position_m[1] += d[1];
-            body.angle_rad += d[2];
-        }
-        s.start_pose.take(chain, None);
-    }
-    Ok(false)
-}
-
-/// The contacts a projection moves out: once moved, each stays in it until it ends.
-#[derive(Default)]
-struct Deep {
-    /// The floor's: (body, point in its axes, the height it is to be at).
-    floor: Vec<(usize, [f64; 2], f64)>,
-    /// The layers': each touch's key and the gap it is to be at (its overlap at the step's
-    /// start, if any; else 0), by key.
-    layers: Vec<(Key, f64)>,
-}
-
-impl Deep {
-    /// Adds the contacts now deeper than `deep_by` below where they may be; whether a floor
-    /// point was added.
-    fn find(
-        &mut self,
-        chain: &ExactChain,
-        s: &mut Scratch,
-        moved: &mut [bool],
-        deep_by: f64,
-    ) -> bool {
-        let before = self.floor.len();
-        if let Some(floor) = chain.floor {
-            let r = chain.radius_m();
-            // A point the step began with below the floor (the engine's laid tape sits its
-            // inset below it) may stay as deep, no deeper.
-            for i in 0..chain.bodies.len() {
-                let range = chain.vertex_at[i]..chain.vertex_at[i + 1];
-                for (v, moved) in range.clone().zip(&mut moved[range]) {
-                    let local = chain.vertices[v];
-                    let floor_at = s.start_gaps[v].min(0.0);
-                    let gap = floor.gap(s.start_pose.point(i, local)) - r;
-                    if gap < floor_at - deep_by && !*moved {
-                        *moved = true;
-                        self.floor.push((i, local, floor_at));
-                    }
-                }
-            }
-        }
-        if chain.layers.is_some() {
-            modes::measure(chain, s);
-            let touches = std::mem::take(&mut s.touches);
-            for t in &touches {
-                let at = s
-                    .layer_start_gaps
-                    .binary_search_by_key(&t.key, |g| g.0)
-                    .map_or(0.0, |i| s.layer_start_gaps[i].1);
-                if t.gap_m < at - deep_by
-                    && let Err(i) = self.layers.binary_search_by_key(&t.key, |d| d.0)
-                {
-                    self.layers.insert(i, (t.key, at));
-                }
-            }
-            s.touches = touches;
-        }
-        self.floor.len() > before
-    }
-
-    /// The rows of the moved contacts at `s.start_pose`: those on one body (the floor's, the
-    /// laid tape's) as (body, Jacobian, how far short of its place), by body; those between
-    /// two bodies as directions with how far short.
-    fn rows(
-        &self,
-        chain: &ExactChain,
-        s: &mut Scratch,
-    ) -> (Vec<OneBody>, Vec<(delassus::Dir, f64)>) {
-        let mut one: Vec<OneBody> = Vec::new();
-        let mut two = Vec::new();
-        if let Some(floor) = chain.floor {
-            let r = chain.radius_m();
-            for &(i, local, at) in &self.floor {
-                let a = s.start_pose.arm(i, local);
-                let gap = floor.gap(s.start_pose.point(i, local)) - r;
-                one.push((i, rows::along(floor.normal, a), at - gap));
-            }
-        }
-        if !self.layers.is_empty() {
-            modes::measure(chain, s);
-            let touches = std::mem::take(&mut s.touches);
-            for t in &touches {
-                let Ok(i) = self.layers.binary_search_by_key(&t.key, |d| d.0) else {
-                    continue;
-                };
-                let at = self.layers[i].1;
-                let offset = |b: usize| {
-                    let c = s.start_pose.centre(b);
-                    [t.point[0] - c[0], t.point[1] - c[1]]
-                };
-                let d = rows::along(t.normal, offset(t.body));
-                match t.other {
-                    None => one.push((t.body, d, at - t.gap_m)),
-                    Some(o) => {
-                        let back = rows::along([-t.normal[0], -t.normal[1]], offset(o));
-                        let dir = delassus::Dir {
-                            body: t.body,
-                            d,
-                            other: Some((o, back)),
-                        };
-                        two.push((dir, at - t.gap_m));
-                    }
-                }
-            }
-            s.touches = touches;
-        }
-        one.sort_by_key(|r| r.0);
-        (one, two)
-    }
 }
 
 /// `v` with gravity's impulse over `dt` added.

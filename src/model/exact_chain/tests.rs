@@ -557,3 +557,5 @@ fn joined_bodies_moving_as_one_lose_nothing_when_their_joint_is_made_rigid() {
 }
 
 mod layers;
+
+mod bounded;

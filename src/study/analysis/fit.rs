@@ -79,11 +79,15 @@ pub fn is_resolution(key: &str) -> bool {
 
 /// The step size a setting stands for, so that a convergence order is positive when the
 /// error falls as the setting is refined: a key naming a size in its unit (`_s`, `_m`,
-/// `_rad`, e.g. `solver.max_dt_s`, `solver.bang_step_rad`) is the step itself; any other
-/// (a count or rate, e.g. `discretisation.links_per_turn`, `solver.steps_per_link`) gives
-/// `1 / value`.
+/// `_rad`, e.g. `solver.max_dt_s`, `solver.bang_step_rad`) or a tolerance
+/// (`solver.bang_tolerance`, finer as it falls) is the step itself; any other (a count or
+/// rate, e.g. `discretisation.links_per_turn`, `solver.steps_per_link`) gives `1 / value`.
 pub fn step_size(key: &str, value: f64) -> f64 {
-    if key.ends_with("_s") || key.ends_with("_m") || key.ends_with("_rad") {
+    if key.ends_with("_s")
+        || key.ends_with("_m")
+        || key.ends_with("_rad")
+        || key.ends_with("_tolerance")
+    {
         value
     } else {
         1.0 / value
@@ -158,6 +162,7 @@ mod tests {
     #[test]
     fn step_size_follows_the_unit() {
         assert!((step_size("solver.bang_step_rad", 0.15) - 0.15).abs() < 1e-15);
+        assert!((step_size("solver.bang_tolerance", 1e-3) - 1e-3).abs() < 1e-18);
         assert_relative_eq!(step_size("solver.max_dt_s", 1e-3), 1e-3);
         assert_relative_eq!(step_size("discretisation.links_per_turn", 32.0), 1.0 / 32.0);
         assert_relative_eq!(step_size("solver.steps_per_link", 4.0), 0.25);

@@ -145,8 +145,8 @@ pub(super) fn build(chain: &ExactChain, s: &mut Scratch, stage: Stage, extra: &[
                 if let Stage::Drift(h) = stage {
                     let a1 = s.end_pose.arm(0, pin.anchor);
                     row.k[0] = along(dir, a1);
-                    let p = s.end_pose.point(0, pin.anchor);
-                    row.rhs = row_dot(&row, &s.v) - (p[c] - pin.at_m[c]) / h;
+                    let opened = pin_opened(chain, s, pin);
+                    row.rhs = row_dot(&row, &s.v) - opened[c] / h;
                 }
                 row.rhs -= row_dot(&row, &s.base);
                 s.rows.push(row);
@@ -254,11 +254,7 @@ fn joint_rows(chain: &ExactChain, s: &mut Scratch, i: usize, stage: Stage) {
         if let Stage::Drift(h) = stage {
             let (a1, b1) = (s.end_pose.arm(i, jt.prev), s.end_pose.arm(i + 1, jt.next));
             row.k = [along(dir, a1), along(neg, b1)];
-            let (pa, pb) = (
-                s.end_pose.point(i, jt.prev),
-                s.end_pose.point(i + 1, jt.next),
-            );
-            row.rhs = row_dot(&row, &s.v) - (pa[c] - pb[c]) / h;
+            row.rhs = row_dot(&row, &s.v) - joint_opened(chain, s, i)[c] / h;
         }
         row.rhs -= row_dot(&row, &s.base);
         s.rows.push(row);
@@ -368,17 +364,58 @@ pub(super) fn drift_gaps(chain: &ExactChain, s: &mut Scratch, h: f64) {
     if let Some(pin) = chain.pin
         && !chain.bodies.is_empty()
     {
-        let p = s.end_pose.point(0, pin.anchor);
-        s.x.extend([0, 1].map(|c| -(p[c] - pin.at_m[c]) / h));
+        let opened = pin_opened(chain, s, pin);
+        s.x.extend([0, 1].map(|c| -opened[c] / h));
     }
-    for (i, jt) in chain.joints.iter().enumerate() {
-        let (pa, pb) = (
-            s.end_pose.point(i, jt.prev),
-            s.end_pose.point(i + 1, jt.next),
-        );
-        s.x.extend([0, 1].map(|c| -(pa[c] - pb[c]) / h));
+    for i in 0..chain.joints.len() {
+        let opened = joint_opened(chain, s, i);
+        s.x.extend([0, 1].map(|c| -opened[c] / h));
     }
     debug_assert_eq!(s.x.len(), s.rows.len(), "the drift's rows, in order");
+}
+
+/// Joint `i`'s gap at the iterate's predicted end (`s.end_pose`), by world axis (m): what
+/// the drift closes. Where the steps are bounded (`ExactChain::bounded`), less its gap at
+/// the step's start (`s.start_pose`): a gap the step starts with, within the position
+/// tolerance (`close_joints`), is left to positions; closed by velocity it would kick the
+/// bodies by gap / h, an energy that grows as the step shortens.
+fn joint_opened(chain: &ExactChain, s: &Scratch, i: usize) -> [f64; 2] {
+    let jt = chain.joints[i];
+    let gap = |pose: &Pose| {
+        let (a, b) = (pose.point(i, jt.prev), pose.point(i + 1, jt.next));
+        [a[0] - b[0], a[1] - b[1]]
+    };
+    let end = gap(&s.end_pose);
+    if !chain.bounded {
+        return end;
+    }
+    let start = gap(&s.start_pose);
+    [end[0] - start[0], end[1] - start[1]]
+}
+
+/// The pin's [`joint_opened`]: its anchor's gap from its world point at the iterate's
+/// predicted end, less that at the step's start where the steps are bounded (m).
+fn pin_opened(chain: &ExactChain, s: &Scratch, pin: super::super::Pin) -> [f64; 2] {
+    let end = s.end_pose.point(0, pin.anchor);
+    let from = if chain.bounded {
+        s.start_pose.point(0, pin.anchor)
+    } else {
+        pin.at_m
+    };
+    [end[0] - from[0], end[1] - from[1]]
+}
+
+/// The widest [`joint_opened`] (and the pin's) at the iterate's predicted end (m): the
+/// drift's measure of closing.
+pub(super) fn widest_opened(chain: &ExactChain, s: &Scratch) -> f64 {
+    let norm = |d: [f64; 2]| d[0].hypot(d[1]);
+    let pin = chain
+        .pin
+        .filter(|_| !chain.bodies.is_empty())
+        .map_or(0.0, |p| norm(pin_opened(chain, s, p)));
+    (0..chain.joints.len())
+        .map(|i| norm(joint_opened(chain, s, i)))
+        .fold(pin, f64::max)
 }
 
 /// Adds the impulses `x` along the rows' directions to the iterate's velocity:
