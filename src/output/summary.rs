@@ -386,7 +386,7 @@ fn moves_line(
         let _ = writeln!(
             o,
             "  of the joints': the moves out of the floor and the layers {moves:.5} J ({:.3} %), \
-             the steps' own error {own:.5} J ({:.3} %), bounded by solver.bang_tolerance",
+             the steps' own error {own:.5} J ({:.3} %), the part solver.bang_tolerance acts on",
             of(moves),
             of(own)
         );
