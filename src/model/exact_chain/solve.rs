@@ -338,17 +338,26 @@ pub(super) fn position_tolerance(chain: &ExactChain) -> f64 {
         .max(4096.0 * f64::EPSILON * largest)
 }
 
+/// Each body's inverse mass matrix, `(1/m, 1/m, 1/I)`, into `s.inv`.
+fn inverse_masses(chain: &ExactChain, s: &mut Scratch) {
+    s.inv.clear();
+    s.inv.extend(
+        chain
+            .bodies
+            .iter()
+            .map(|b| [1.0 / b.mass_kg, 1.0 / b.mass_kg, 1.0 / b.inertia_kg_m2]),
+    );
+}
+
 /// The start's velocity and pose, and the inverse masses; the layers' features within
 /// reach, which fails where their search outgrows its bound.
 fn prepare(chain: &ExactChain, s: &mut Scratch, gravity: [f64; 2]) -> Result<(), StepError> {
     s.free.clear();
-    s.inv.clear();
     for b in &chain.bodies {
         let [u, w] = b.velocity_m_s;
         s.free.push([u, w, b.spin_rad_s]);
-        s.inv
-            .push([1.0 / b.mass_kg, 1.0 / b.mass_kg, 1.0 / b.inertia_kg_m2]);
     }
+    inverse_masses(chain, s);
     s.v.clone_from(&s.free);
     s.gravity = gravity;
     s.start_pose.take(chain, None);

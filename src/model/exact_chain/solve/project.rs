@@ -42,16 +42,7 @@ pub(super) fn project_out(
         rows::build_projection(chain, s, &rows);
         rows::solve(chain, s)?;
         if pairs.is_empty() {
-            for (r, &y) in s.rows.iter().zip(&s.x) {
-                for a in 0..r.count {
-                    let (b, d) = (r.body[a], r.d[a]);
-                    let w = s.inv[b];
-                    let body = &mut chain.bodies[b];
-                    body.position_m[0] += w[0] * d[0] * y;
-                    body.position_m[1] += w[1] * d[1] * y;
-                    body.angle_rad += w[2] * d[2] * y;
-                }
-            }
+            move_by_rows(chain, s);
             s.start_pose.take(chain, None);
             continue;
         }
@@ -93,13 +84,7 @@ pub(super) fn project_out(
 /// kinetic energy.
 pub(super) fn close_joints(chain: &mut ExactChain, s: &mut Scratch) -> Result<(), StepError> {
     let tol = position_tolerance(chain);
-    s.inv.clear();
-    s.inv.extend(
-        chain
-            .bodies
-            .iter()
-            .map(|b| [1.0 / b.mass_kg, 1.0 / b.mass_kg, 1.0 / b.inertia_kg_m2]),
-    );
+    inverse_masses(chain, s);
     for _ in 0..chain.tolerance.max_iterations {
         s.start_pose.take(chain, None);
         if s.start_pose.joint_gap(chain) <= tol {
@@ -107,18 +92,24 @@ pub(super) fn close_joints(chain: &mut ExactChain, s: &mut Scratch) -> Result<()
         }
         rows::build_projection(chain, s, &[]);
         rows::solve(chain, s)?;
-        for (r, &y) in s.rows.iter().zip(&s.x) {
-            for a in 0..r.count {
-                let (b, d) = (r.body[a], r.d[a]);
-                let w = s.inv[b];
-                let body = &mut chain.bodies[b];
-                body.position_m[0] += w[0] * d[0] * y;
-                body.position_m[1] += w[1] * d[1] * y;
-                body.angle_rad += w[2] * d[2] * y;
-            }
-        }
+        move_by_rows(chain, s);
     }
     Ok(())
+}
+
+/// Moves the bodies by the solved projection: each row's multiplier in `s.x` along its
+/// directions, weighted by the inverse masses.
+fn move_by_rows(chain: &mut ExactChain, s: &Scratch) {
+    for (r, &y) in s.rows.iter().zip(&s.x) {
+        for a in 0..r.count {
+            let (b, d) = (r.body[a], r.d[a]);
+            let w = s.inv[b];
+            let body = &mut chain.bodies[b];
+            body.position_m[0] += w[0] * d[0] * y;
+            body.position_m[1] += w[1] * d[1] * y;
+            body.angle_rad += w[2] * d[2] * y;
+        }
+    }
 }
 
 /// The drift's velocity held to the joints again where [`project_out`] moved the bodies:
