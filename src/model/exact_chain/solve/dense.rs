@@ -12,7 +12,9 @@
 //! asked (its regularised solve answers with impulses that change velocities by far more
 //! than was asked) lets its sticking contacts slide and its sliding ones stick, as an
 //! impact's friction does where sliding would pull a slender piece into the surface
-//! (Painleve's paradox); a contact the joints hold still is left out. Where the modes do not
+//! (Painleve's paradox); a contact the joints hold still is left out; a contact whose point
+//! the joints leave one direction to move in sticks with its impulse along that direction
+//! (see [`ONE_WAY`]). Where the modes do not
 //! settle the stage is left to Gauss-Seidel (`super::delassus::solve`), whose impulses
 //! stay bounded. Projected Gauss-Seidel alone converged slowly on the stiff, coupled
 //! contacts of tape piled on tape: on the yoga mat's bang it missed its tolerance in most
@@ -27,6 +29,25 @@ use super::{Scratch, position_tolerance};
 /// change the pass asked for is the regularisation's answer to a set that cannot hold it
 /// (see [`solve`]): a consistent set's impulses change velocities by what was asked.
 const WILD: f64 = 1e4;
+
+/// A contact whose two rows (normal, tangent) respond as one, their 2x2 block's determinant
+/// below this fraction of its diagonal's product, has a point the joints leave one direction
+/// to move in: a point of the pinned first piece, or a fold at a joint, where two pieces
+/// meet near the joint that joins them. (On the thin tape such blocks measure 1e-16 to
+/// 1e-13 of their diagonal's product, the others 1e-2 or more.) An impulse across that
+/// direction moves nothing: the Delassus matrix is positive semi-definite, so what is null
+/// in its own block is null in all of it. A sticking contact there asks for its normal
+/// velocity alone and takes its impulse along its direction, the least impulse that holds
+/// it (its slip is then what its direction carries with that normal velocity, zero where
+/// that is); beyond its friction cone it slides, as any contact does. Asked to hold both its
+/// rows,
+/// a contact whose targets the one direction could not meet answered with an impulse across
+/// it bounded only by the regularisation: 121 N s on a piece of 0.2 g at the thin tape's
+/// anchor, its normal and friction parts booking -0.85 J and +0.85 J (b/R = 1/100 with a
+/// core, friction 1, push 0.101). (Sliding through the impact, as the impact resolved in
+/// its own time would have such a point slide, was tried: coupled one-way contacts made the
+/// sliding system singular, and a run's joints booked -400 J.)
+const ONE_WAY: f64 = 1e-9;
 
 /// Solves the stage's velocity, from `s.free` into `s.v`, and the candidates' impulses; its
 /// iterations are its passes. `None` if the modes did not settle or a pass's system was
@@ -46,6 +67,7 @@ pub(super) fn solve(
         columns: vec![None; dirs.len()],
         modes: first_modes(&s.candidates),
         inert: vec![false; s.candidates.len()],
+        one_way: vec![None; s.candidates.len()],
         tol_speed,
     };
     let mut pivots = Pivots::default();
@@ -83,6 +105,16 @@ pub(super) fn solve(
     Ok(None)
 }
 
+/// One unknown of a pass: an impulse along `impulse` (its normal and tangent parts) at
+/// `contact`, and the equation it answers: the velocity along `equation` held at its target
+/// (the normal's target; none along the tangent).
+#[derive(Debug, Clone, Copy)]
+struct Unknown {
+    contact: usize,
+    impulse: [f64; 2],
+    equation: [f64; 2],
+}
+
 /// A stage's contacts under Coulomb's law, and what is known of their Delassus matrix.
 struct Coulomb {
     /// Each direction's velocity with the joints held and no contact (two a contact:
@@ -93,7 +125,23 @@ struct Coulomb {
     modes: Vec<Mode>,
     /// Contacts the joints hold still: they take nothing and ask for nothing.
     inert: Vec<bool>,
+    /// The one direction a contact's point may move in, as a unit combination of its normal
+    /// and tangent (its normal part `>= 0`), where the joints leave it one ([`ONE_WAY`]).
+    one_way: Vec<Option<[f64; 2]>>,
     tol_speed: f64,
+}
+
+/// The direction a 2x2 block `[[nn, nt], [nt, tt]]` responds along, where it responds along
+/// one alone ([`ONE_WAY`]): a unit vector with its first part `>= 0`.
+fn one_way(nn: f64, nt: f64, tt: f64) -> Option<[f64; 2]> {
+    if nn * tt - nt * nt > ONE_WAY * nn * tt {
+        return None;
+    }
+    // The block's range: its larger column.
+    let y = if nn >= tt { [nn, nt] } else { [nt, tt] };
+    let norm = y[0].hypot(y[1]);
+    let sign = if y[0] < 0.0 { -1.0 } else { 1.0 };
+    (norm > 0.0).then(|| [sign * y[0] / norm, sign * y[1] / norm])
 }
 
 impl Coulomb {
@@ -119,6 +167,8 @@ impl Coulomb {
                 self.inert[i] = true;
             } else if self.modes[i] == Mode::Stick && still(2 * i + 1) {
                 self.modes[i] = Mode::Slide(0.0);
+            } else if let (Some(n), Some(t)) = (&self.columns[2 * i], &self.columns[2 * i + 1]) {
+                self.one_way[i] = one_way(n[2 * i], n[2 * i + 1], t[2 * i + 1]);
             }
         }
     }
@@ -199,54 +249,85 @@ impl Coulomb {
         broken
     }
 
+    /// The unknowns the modes give: each on contact's normal impulse, and a sticking one's
+    /// friction, each answering its own direction's velocity; a sliding one's friction
+    /// follows its normal impulse; a sticking one-way contact ([`ONE_WAY`]) has one impulse,
+    /// along its direction, answering its normal velocity.
+    fn unknowns(&self, s: &Scratch) -> Vec<Unknown> {
+        let mut unknowns = Vec::new();
+        for (i, &mode) in self.modes.iter().enumerate() {
+            let one = |impulse: [f64; 2], equation: [f64; 2]| Unknown {
+                contact: i,
+                impulse,
+                equation,
+            };
+            match (mode, self.one_way[i]) {
+                (Mode::Off, _) => {}
+                (Mode::Stick, Some(y)) => unknowns.push(one(y, [1.0, 0.0])),
+                (Mode::Stick, None) => {
+                    unknowns.extend([one([1.0, 0.0], [1.0, 0.0]), one([0.0, 1.0], [0.0, 1.0])]);
+                }
+                (Mode::Slide(sign), _) => {
+                    unknowns.push(one([1.0, sign * s.candidates[i].mu], [1.0, 0.0]));
+                }
+            }
+        }
+        unknowns
+    }
+
     /// The impulses along every direction (two a contact: normal, tangent) that the modes
     /// ask for: a sticking contact's relative velocity at its target normally and none
     /// tangentially, a sliding one's normal velocity at its target with its friction `mu`
     /// times its normal impulse; each equation's diagonal made `regularisation` of itself
     /// larger (a compliance). `None` where the system is singular.
     fn impulses(&self, s: &Scratch, regularisation: f64) -> Option<Vec<f64>> {
-        // The unknowns: each on contact's normal impulse, and a sticking one's friction;
-        // a sliding one's friction follows its normal impulse.
-        let mut unknowns: Vec<(usize, Option<f64>)> = Vec::new();
-        for (i, &mode) in self.modes.iter().enumerate() {
-            match mode {
-                Mode::Off => {}
-                Mode::Stick => unknowns.extend([(2 * i, None), (2 * i + 1, None)]),
-                Mode::Slide(sign) => unknowns.push((2 * i, Some(sign * s.candidates[i].mu))),
-            }
-        }
+        let unknowns = self.unknowns(s);
         let column = |j: usize| {
             self.columns[j]
                 .as_ref()
                 .expect("a column for each contact on")
         };
+        // The velocity along `along` (normal, tangent parts) at contact `at` from a unit of
+        // the unknown `u`.
+        let response = |along: [f64; 2], at: usize, u: &Unknown| -> f64 {
+            let mut x = 0.0;
+            for (k, &e) in along.iter().enumerate() {
+                if e == 0.0 {
+                    continue;
+                }
+                let mut y = 0.0;
+                for (m, &f) in u.impulse.iter().enumerate() {
+                    if f != 0.0 {
+                        y += f * column(2 * u.contact + m)[2 * at + k];
+                    }
+                }
+                x += e * y;
+            }
+            x
+        };
         let n = unknowns.len();
         let mut a = vec![0.0; n * n];
         let mut b = vec![0.0; n];
-        // Each unknown's equation is its own direction's: the velocity along it at its
-        // target (the normal's) or zero (the friction's of a sticking contact).
-        for (r, &(row, _)) in unknowns.iter().enumerate() {
-            let target = if row % 2 == 0 {
-                s.candidates[row / 2].target
-            } else {
-                0.0
-            };
-            b[r] = target - self.u0[row];
-            for (c, &(col, slide)) in unknowns.iter().enumerate() {
-                let mut x = column(col)[row];
-                if let Some(f) = slide {
-                    x += f * column(col + 1)[row];
-                }
-                a[r * n + c] = x;
+        for (r, row) in unknowns.iter().enumerate() {
+            let i = row.contact;
+            let [e_n, e_t] = row.equation;
+            b[r] = e_n * (s.candidates[i].target - self.u0[2 * i]) - e_t * self.u0[2 * i + 1];
+            for (c, col) in unknowns.iter().enumerate() {
+                a[r * n + c] = response(row.equation, i, col);
             }
-            a[r * n + r] += regularisation * column(row)[row].abs();
+            let own = Unknown {
+                impulse: row.equation,
+                ..*row
+            };
+            a[r * n + r] += regularisation * response(row.equation, i, &own).abs();
         }
         let x = delassus::lu_solve(&mut a, &mut b, n)?;
         let mut p = vec![0.0; self.columns.len()];
-        for (&(col, slide), &x) in unknowns.iter().zip(&x) {
-            p[col] = x;
-            if let Some(f) = slide {
-                p[col + 1] = f * x;
+        for (u, &x) in unknowns.iter().zip(&x) {
+            for (m, &f) in u.impulse.iter().enumerate() {
+                if f != 0.0 {
+                    p[2 * u.contact + m] = f * x;
+                }
             }
         }
         Some(p)

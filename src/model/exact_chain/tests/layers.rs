@@ -230,3 +230,74 @@ fn a_spinning_piece_landing_flat_slips_at_its_face_not_its_midline() {
         assert!((normal / want - 1.0).abs() < 1e-3, "took {normal:e} J");
     }
 }
+
+#[test]
+fn a_pinned_piece_resting_on_the_laid_tape_near_its_pin_takes_the_least_impulse_that_holds_it() {
+    // A rod pinned at its end rests on a ridge of the laid tape, the ridge's node at d from
+    // the pin, under gravity. Its point of contact (at the face, R below the midline, at arm
+    // (d, -R) from the pin) can move one way only, across its arm: the pin leaves it one
+    // direction, tilted by atan(R / d) from the normal, and friction 1 holds it there. Any
+    // impulse across that direction is the pin's, so the contact's own is the least that
+    // holds the rod: each step, gravity's moment about the pin, m g (l / 2) h, over |arm|,
+    // along the direction. Asked to hold the point's normal and tangential velocity both,
+    // with one direction to move, the step answered with an impulse across it that the pin
+    // cancelled and the regularisation alone bounded, its normal and friction work large and
+    // opposite (at the thin tape's anchor, 121 N s on a 0.2 g piece; docs/bang-map.md).
+    // Bounds: the last step's impulse within 1e-6 of the least (measured within 1e-12), the
+    // rod's spin below 1e-6 rad/s, and each part of a contact's work in a step below what
+    // gravity's kick gives the rod in one, m (g h)^2 (measured at a fifth of it).
+    let (l, m, d, g, h) = (0.1, 0.05, 0.03, 9.81, 1e-4);
+    let body = rod(m, l, [0.5 * l, 2.0 * R], [0.0, 0.0], 0.0);
+    let pin = Pin {
+        anchor: [-0.5 * l, 0.0],
+        at_m: [0.0, 2.0 * R],
+    };
+    let mut chain = ExactChain::new(vec![body], Vec::new(), Some(pin), TOLERANCE);
+    let laid = Outline {
+        nodes: vec![[d - 0.1, -0.1], [d, 0.0], [d + 0.1, -0.1]],
+        arc_m: vec![0.0, 0.1, 0.2],
+    };
+    chain.set_layers(layers(1.0, vec![outline(l, 1.0)], laid));
+    let least = m * g * 0.5 * l * h / d.hypot(R);
+    let (mut largest, mut work) = (0.0_f64, 0.0_f64);
+    for _ in 0..20 {
+        let report = chain.step(h, [0.0, -g]).expect("solves");
+        assert!(report.converged, "{report:?}");
+        let (mut p, mut w) = ([0.0; 2], 0.0_f64);
+        for c in chain.contacts() {
+            for (k, pk) in p.iter_mut().enumerate() {
+                *pk += c.normal_n_s[k] + c.friction_n_s[k];
+            }
+            w = w.max(c.work_j[0].abs()).max(c.work_j[1].abs());
+        }
+        largest = largest.max(p[0].hypot(p[1]) / least);
+        work = work.max(w);
+    }
+    let p: f64 = chain
+        .contacts()
+        .iter()
+        .map(|c| {
+            let p = [
+                c.normal_n_s[0] + c.friction_n_s[0],
+                c.normal_n_s[1] + c.friction_n_s[1],
+            ];
+            p[0].hypot(p[1])
+        })
+        .sum();
+    let spin = chain.bodies()[0].spin_rad_s;
+    println!(
+        "the last step's impulse {:.12} of the least, the largest {largest:.3e} of it; the \
+         largest work of a contact in a step {work:.3e} J; spin {spin:.3e} rad/s",
+        p / least
+    );
+    assert!(
+        (p / least - 1.0).abs() < 1e-6,
+        "the impulse {p:e} N s, the least that holds the rod {least:e} N s"
+    );
+    assert!(spin.abs() < 1e-6, "spin {spin:e} rad/s");
+    let kick = m * (g * h) * (g * h);
+    assert!(
+        work < kick,
+        "a contact's work {work:e} J in a step, above {kick:e} J"
+    );
+}
