@@ -489,8 +489,8 @@ contact_speed_m_s = 0.3
     #[test]
     fn shipped_scenes_equal_their_defaults() {
         // The shipped files write out default values; dropping them must not change the scene.
-        // The yoga mat sets two values off their defaults: it rolls on to r = b, and its bang
-        // is on the exact chain.
+        // The yoga mat sets two values off their defaults: it rolls on to r = b (given in
+        // thicknesses), and its bang is on the exact chain.
         let s = shipped("yoga-mat");
         let text =
             format!("{MINIMAL}[solver]\nbang_engine = \"exact\"\n[stop]\nbang_radius_m = 0.005\n");

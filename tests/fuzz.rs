@@ -39,6 +39,8 @@ fn valid_value(key: &str) -> Option<String> {
         "contact.model" => "\"spiral\"",
         // Off by default; the yoga mat's file shows it commented out.
         "solver.bang_tolerance" => "1e-3",
+        // The yoga mat gives these in thicknesses (solver.bang_piece_b, stop.bang_radius_b).
+        "solver.bang_piece_m" | "stop.bang_radius_m" => "0.005",
         _ => return None,
     };
     Some(default.to_owned())

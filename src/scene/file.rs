@@ -33,18 +33,27 @@ pub const SCENE_KEYS: &[&str] = &[
     "solver.bang_iterations",
     "solver.bang_relax_iterations",
     "solver.bang_piece_m",
+    "solver.bang_piece_b",
     "solver.contact_hz",
     "solver.joint_hz",
     "solver.bang_joint_hz",
     "solver.bang_engine",
     "contact.model",
     "stop.bang_radius_m",
+    "stop.bang_radius_b",
     "stop.max_time_s",
     "stop.bang_cap_s",
     "stop.rest_fraction",
     "axis.fixed",
     "output.sample_interval_s",
     "output.scene_rate_hz",
+];
+
+/// The keys that give one length two ways, in metres and in the tape's thicknesses: a file
+/// gives one of each pair, and a value on the command line for one replaces the file's other.
+pub(crate) const ALTERNATIVES: [(&str, &str); 2] = [
+    ("solver.bang_piece_m", "solver.bang_piece_b"),
+    ("stop.bang_radius_m", "stop.bang_radius_b"),
 ];
 
 /// Default `discretisation.links_per_turn`.
@@ -202,6 +211,8 @@ pub(super) struct SolverFile {
     pub(super) bang_relax_iterations: i64,
     /// `None` means "the tape's thickness" (see [`crate::scene::Solver::bang_piece_m`]).
     pub(super) bang_piece_m: Option<f64>,
+    /// The pieces in the tape's thicknesses, in place of `bang_piece_m`.
+    pub(super) bang_piece_b: Option<f64>,
     pub(super) contact_hz: f64,
     pub(super) joint_hz: f64,
     pub(super) bang_joint_hz: f64,
@@ -220,6 +231,7 @@ impl Default for SolverFile {
             bang_iterations: DEFAULT_BANG_ITERATIONS,
             bang_relax_iterations: DEFAULT_BANG_RELAX_ITERATIONS,
             bang_piece_m: None,
+            bang_piece_b: None,
             contact_hz: DEFAULT_CONTACT_HZ,
             joint_hz: DEFAULT_JOINT_HZ,
             bang_joint_hz: DEFAULT_BANG_JOINT_HZ,
@@ -250,6 +262,9 @@ pub(super) enum ContactModel {
 pub(super) struct StopFile {
     /// `None` means "derive from the tape" (see [`crate::scene::Stop::bang_radius_m`]).
     pub(super) bang_radius_m: Option<f64>,
+    /// The bang radius in the tape's thicknesses above the core, in place of
+    /// `bang_radius_m`.
+    pub(super) bang_radius_b: Option<f64>,
     pub(super) max_time_s: f64,
     pub(super) bang_cap_s: f64,
     pub(super) rest_fraction: f64,
@@ -259,6 +274,7 @@ impl Default for StopFile {
     fn default() -> Self {
         Self {
             bang_radius_m: None,
+            bang_radius_b: None,
             max_time_s: DEFAULT_MAX_TIME_S,
             bang_cap_s: DEFAULT_BANG_CAP_S,
             rest_fraction: DEFAULT_REST_FRACTION,
@@ -440,12 +456,14 @@ mod tests {
                 "solver.bang_iterations" => "24",
                 "solver.bang_relax_iterations" => "1",
                 "solver.bang_piece_m" => "0.005",
+                "solver.bang_piece_b" => "1",
                 "solver.contact_hz" => "1e4",
                 "solver.joint_hz" => "1e7",
                 "solver.bang_joint_hz" => "1e9",
                 "solver.bang_engine" => "exact",
                 "contact.model" => "spiral",
                 "stop.bang_radius_m" => "0.01",
+                "stop.bang_radius_b" => "2",
                 "stop.max_time_s" => "60",
                 "stop.bang_cap_s" => "2",
                 "output.scene_rate_hz" => "100",

@@ -6,6 +6,7 @@
 use std::fmt;
 use std::str::FromStr;
 
+use crate::scene::file::ALTERNATIVES;
 use crate::scene::folded::{self, FoldedChain};
 use crate::scene::{AnyScene, Scene, SceneError};
 
@@ -188,6 +189,20 @@ fn edited(text: &str, name: &str, overrides: &[Override]) -> Result<String, Scen
         name: name.to_owned(),
         message: e.to_string(),
     })?;
+    // A length given on the command line one way replaces the file's other way of giving
+    // it (two on the command line are refused by the scene's rules).
+    for o in overrides {
+        let other = ALTERNATIVES.iter().find_map(|&(a, b)| {
+            (o.key == a)
+                .then_some(b)
+                .or_else(|| (o.key == b).then_some(a))
+        });
+        if let Some((section, key)) = other.and_then(|k| k.split_once('.'))
+            && let Some(toml::Value::Table(t)) = table.get_mut(section)
+        {
+            t.remove(key);
+        }
+    }
     for o in overrides {
         set(&mut table, &o.key, o.value.clone())?;
     }

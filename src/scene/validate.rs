@@ -11,7 +11,7 @@ use crate::scene::budget::{self, MAX_LINKS};
 use crate::scene::file::{
     DiscretisationFile, FloorFile, OutputFile, PushFile, SceneFile, SolverFile, StopFile, TapeFile,
 };
-use crate::scene::rules::{MIDPOINT_RETIRED, check, check_int, invalid, name};
+use crate::scene::rules::{MIDPOINT_RETIRED, Shown, check, check_int, invalid, name};
 use crate::scene::{
     Axis, BangEngine, Discretisation, Floor, Gravity, Output, Push, Scene, SceneError, Solver,
     Stop, Tape,
@@ -234,9 +234,17 @@ fn push(p: &PushFile, g: f64) -> Result<f64, SceneError> {
     Ok(push)
 }
 
-/// `[solver]`: each setting in its range; `bang_piece_m` defaults to the tape's thickness.
+/// `[solver]`: each setting in its range; the pieces are given in metres
+/// (`bang_piece_m`) or in the tape's thicknesses (`bang_piece_b`), not both, and default to
+/// its thickness.
 fn solver(s: &SolverFile, tape: &Tape) -> Result<Solver, SceneError> {
-    let piece = s.bang_piece_m.unwrap_or(tape.thickness_m);
+    let b = tape.thickness_m;
+    let piece = match (s.bang_piece_m, s.bang_piece_b) {
+        (Some(m), Some(_)) => return Err(both("solver.bang_piece", m)),
+        (Some(m), None) => check("solver.bang_piece_m", m, m >= 0.0, "must be >= 0")?,
+        (None, Some(k)) => check("solver.bang_piece_b", k, k >= 0.0, "must be >= 0")? * b,
+        (None, None) => b,
+    };
     let positive = |key: &str, v: f64| check(key, v, v > 0.0, "must be > 0");
     Ok(Solver {
         max_dt_s: check(
@@ -285,7 +293,7 @@ fn solver(s: &SolverFile, tape: &Tape) -> Result<Solver, SceneError> {
             s.bang_relax_iterations,
             &ITERATIONS_RANGE,
         )?,
-        bang_piece_m: check("solver.bang_piece_m", piece, piece >= 0.0, "must be >= 0")?,
+        bang_piece_m: piece,
         contact_hz: positive("solver.contact_hz", s.contact_hz)?,
         joint_hz: positive("solver.joint_hz", s.joint_hz)?,
         bang_joint_hz: positive("solver.bang_joint_hz", s.bang_joint_hz)?,
@@ -310,27 +318,52 @@ fn solver(s: &SolverFile, tape: &Tape) -> Result<Solver, SceneError> {
     })
 }
 
-/// `[stop]`: a bang radius between the core and R (by default two thicknesses above the
-/// core), the time limits and the rest fraction.
+/// The error for a length given both in metres (`{stem}_m`, its value `m`) and in the
+/// tape's thicknesses (`{stem}_b`).
+fn both(stem: &str, m: f64) -> SceneError {
+    invalid(
+        &format!("{stem}_m"),
+        Shown(m),
+        format!("give {stem}_m (metres) or {stem}_b (the tape's thicknesses), not both"),
+    )
+}
+
+/// `[stop]`: a bang radius between the core and R, given in metres or in thicknesses above
+/// the core, not both (by default two thicknesses above the core), the time limits and the
+/// rest fraction.
 fn stop(st: &StopFile, tape: &Tape) -> Result<Stop, SceneError> {
     let (core, r, b) = (tape.core_radius_m, tape.outer_radius_m, tape.thickness_m);
-    let (bang, defaulted) = match st.bang_radius_m {
-        Some(v) => (v, ""),
-        None => (
-            core + 2.0 * b,
-            " (defaulted to tape.core_radius_m + 2 * tape.thickness_m; set it explicitly)",
-        ),
-    };
-    Ok(Stop {
-        bang_radius_m: check(
+    let within = |v: f64| core < v && v < r;
+    let rule = format!("must be > tape.core_radius_m (= {core}) and < tape.outer_radius_m (= {r})");
+    let bang = match (st.bang_radius_m, st.bang_radius_b) {
+        (Some(m), Some(_)) => return Err(both("stop.bang_radius", m)),
+        (Some(v), None) => check("stop.bang_radius_m", v, within(v), rule)?,
+        (None, Some(k)) => {
+            let v = core + k * b;
+            check(
+                "stop.bang_radius_b",
+                k,
+                within(v),
+                format!(
+                    "must put the bang radius, tape.core_radius_m + stop.bang_radius_b * \
+                     tape.thickness_m (= {v} m), > tape.core_radius_m (= {core}) and < \
+                     tape.outer_radius_m (= {r})"
+                ),
+            )?;
+            v
+        }
+        (None, None) => check(
             "stop.bang_radius_m",
-            bang,
-            core < bang && bang < r,
+            core + 2.0 * b,
+            within(core + 2.0 * b),
             format!(
-                "must be > tape.core_radius_m (= {core}) \
-                 and < tape.outer_radius_m (= {r}){defaulted}"
+                "{rule} (defaulted to tape.core_radius_m + 2 * tape.thickness_m; set it \
+                 explicitly)"
             ),
         )?,
+    };
+    Ok(Stop {
+        bang_radius_m: bang,
         max_time_s: check(
             "stop.max_time_s",
             st.max_time_s,
@@ -384,6 +417,59 @@ mod tests {
     }
 
     #[test]
+    fn lengths_in_thicknesses_follow_the_thickness() {
+        // The pieces and the bang radius in thicknesses keep the model's proportions when
+        // the thickness changes; in metres they do not.
+        use crate::scene::overrides::{Override, scene_with_overrides};
+        let text = format!("{MINIMAL}[solver]\nbang_piece_b = 2.0\n[stop]\nbang_radius_b = 3.0\n");
+        for b in [0.005, 0.002, 0.0005] {
+            let thickness = b.to_string();
+            let s = scene_with_overrides(
+                &text,
+                "t",
+                &[
+                    Override::new("tape.thickness_m", &thickness),
+                    Override::new("tape.core_radius_m", "0.01"),
+                ],
+            )
+            .unwrap();
+            assert_relative_eq!(s.solver.bang_piece_m, 2.0 * b);
+            assert_relative_eq!(s.stop.bang_radius_m, 0.01 + 3.0 * b);
+        }
+        for (section, stem) in [("solver", "bang_piece"), ("stop", "bang_radius")] {
+            let text = format!("{MINIMAL}[{section}]\n{stem}_m = 0.01\n{stem}_b = 2.0\n");
+            let msg = err(&text);
+            assert_eq!(
+                msg,
+                format!(
+                    "{section}.{stem}_m = 0.01: give {section}.{stem}_m (metres) or \
+                     {section}.{stem}_b (the tape's thicknesses), not both"
+                )
+            );
+        }
+        // On the command line, one way replaces the file's other.
+        let s = scene_with_overrides(&text, "t", &[Override::new("solver.bang_piece_m", "0.007")])
+            .unwrap();
+        assert_relative_eq!(s.solver.bang_piece_m, 0.007);
+        let e = scene_with_overrides(
+            &text,
+            "t",
+            &[
+                Override::new("stop.bang_radius_m", "0.02"),
+                Override::new("stop.bang_radius_b", "1"),
+            ],
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("not both"), "{e}");
+        let msg = rejects("stop", "bang_radius_b", "12");
+        assert!(
+            msg.starts_with("stop.bang_radius_b = 12: must put the bang radius"),
+            "{msg}"
+        );
+    }
+
+    #[test]
     fn default_bang_radius_follows_core() {
         let s = Scene::from_toml_str(&with("tape", "core_radius_m", "0.02"), "t").unwrap();
         assert_relative_eq!(s.stop.bang_radius_m, 0.03);
@@ -405,10 +491,12 @@ mod tests {
             ("solver", "bang_step_rad"),
             ("solver", "bang_tolerance"),
             ("solver", "bang_piece_m"),
+            ("solver", "bang_piece_b"),
             ("solver", "contact_hz"),
             ("solver", "joint_hz"),
             ("solver", "bang_joint_hz"),
             ("stop", "bang_radius_m"),
+            ("stop", "bang_radius_b"),
             ("stop", "max_time_s"),
             ("stop", "bang_cap_s"),
             ("stop", "rest_fraction"),
@@ -471,6 +559,9 @@ mod tests {
             ("stop", "rest_fraction", "0.0"),
             ("stop", "rest_fraction", "1.0"),
             ("solver", "bang_piece_m", "-0.001"),
+            ("solver", "bang_piece_b", "-1"),
+            ("stop", "bang_radius_b", "0.0"),
+            ("stop", "bang_radius_b", "12"),
             ("solver", "bang_iterations", "0"),
             ("solver", "bang_iterations", "1001"),
             ("solver", "bang_relax_iterations", "0"),
@@ -505,6 +596,8 @@ mod tests {
             ("solver", "freeze_speed_m_s", "0.0"),
             ("stop", "bang_cap_s", "0.0"),
             ("solver", "bang_piece_m", "0.0"),
+            ("solver", "bang_piece_b", "0.0"),
+            ("stop", "bang_radius_b", "11.9"),
             ("solver", "bang_iterations", "1"),
             ("output", "sample_interval_s", "0.0"),
             ("output", "scene_rate_hz", "0.0"),
