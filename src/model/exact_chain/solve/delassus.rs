@@ -240,11 +240,15 @@ pub(super) fn matrix(chain: &ExactChain, s: &Scratch, dirs: &[Dir]) -> Vec<f64> 
 /// Whether `dir`, whose response with the rows held is `w_ii`, is held still by them
 /// ([`HELD`]).
 pub(super) fn held_still(s: &Scratch, dir: &Dir, w_ii: f64) -> bool {
-    let free: f64 = dir
-        .parts()
+    w_ii <= HELD * free_response(s, dir)
+}
+
+/// The velocity along `dir` from a unit impulse along it with no row held: its bodies'
+/// inverse masses along it.
+pub(super) fn free_response(s: &Scratch, dir: &Dir) -> f64 {
+    dir.parts()
         .map(|(b, d)| rows::weighted(d, s.inv[b], d))
-        .sum();
-    w_ii <= HELD * free
+        .sum()
 }
 
 /// The columns `which` of the Delassus matrix of `dirs` (see [`matrix`]), each the

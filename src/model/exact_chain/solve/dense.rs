@@ -13,8 +13,8 @@
 //! than was asked) lets its sticking contacts slide and its sliding ones stick, as an
 //! impact's friction does where sliding would pull a slender piece into the surface
 //! (Painleve's paradox); a contact the joints hold still is left out; a contact whose point
-//! the joints leave one direction to move in sticks with its impulse along that direction
-//! (see [`ONE_WAY`]). Where the modes do not
+//! the joints leave one direction to move in sticks along that direction alone (see
+//! [`ONE_WAY`]). Where the modes do not
 //! settle the stage is left to Gauss-Seidel (`super::delassus::solve`), whose impulses
 //! stay bounded. Projected Gauss-Seidel alone converged slowly on the stiff, coupled
 //! contacts of tape piled on tape: on the yoga mat's bang it missed its tolerance in most
@@ -30,24 +30,29 @@ use super::{Scratch, position_tolerance};
 /// (see [`solve`]): a consistent set's impulses change velocities by what was asked.
 const WILD: f64 = 1e4;
 
-/// A contact whose two rows (normal, tangent) respond as one, their 2x2 block's determinant
-/// below this fraction of its diagonal's product, has a point the joints leave one direction
-/// to move in: a point of the pinned first piece, or a fold at a joint, where two pieces
-/// meet near the joint that joins them. (On the thin tape such blocks measure 1e-16 to
-/// 1e-13 of their diagonal's product, the others 1e-2 or more.) An impulse across that
-/// direction moves nothing: the Delassus matrix is positive semi-definite, so what is null
-/// in its own block is null in all of it. A sticking contact there asks for its normal
-/// velocity alone and takes its impulse along its direction, the least impulse that holds
-/// it (its slip is then what its direction carries with that normal velocity, zero where
-/// that is); beyond its friction cone it slides, as any contact does. Asked to hold both its
-/// rows,
-/// a contact whose targets the one direction could not meet answered with an impulse across
-/// it bounded only by the regularisation: 121 N s on a piece of 0.2 g at the thin tape's
-/// anchor, its normal and friction parts booking -0.85 J and +0.85 J (b/R = 1/100 with a
-/// core, friction 1, push 0.101). (Sliding through the impact, as the impact resolved in
-/// its own time would have such a point slide, was tried: coupled one-way contacts made the
-/// sliding system singular, and a run's joints booked -400 J.)
-const ONE_WAY: f64 = 1e-9;
+/// A contact whose two rows (normal, tangent) respond as one, the smaller eigenvalue of
+/// their 2x2 block below this fraction of its normal's response with no row held, has a
+/// point the joints leave one direction to move in: a point of the pinned first piece, or a
+/// fold at a joint, where two pieces meet near the joint that joins them. (On the thin tape
+/// such blocks' determinants measure 1e-16 to 1e-13 of their diagonal's product, and up to
+/// 1e-4 where the held rows' regularisation and rounding are all that is left across the
+/// direction, a held direction's response near 1e-10 of its free one; the others' 1e-2 or
+/// more.) An impulse across that direction moves nothing: the Delassus matrix is positive
+/// semi-definite, so what is null in its own block is null in all of it. A sticking contact
+/// there asks for its velocity along its direction alone, at what its normal target asks of
+/// it, and takes its impulse along the direction: the least impulse that holds it. Beyond
+/// its friction cone it slides, as any contact does. (Holding its normal velocity alone
+/// instead asks a point that moves nearly along the surface for a velocity along its
+/// direction of the normal's over a small cosine: a run's energy rose by 2.5 times its scale
+/// at b/R = 1/100, friction 0.6, push 0.106.)
+/// Asked to hold both its rows, a contact whose targets the one direction could not meet
+/// answered with an impulse across it bounded only by the regularisation: 121 N s on a piece
+/// of 0.2 g at the thin tape's anchor, its normal and friction parts booking -0.85 J and
+/// +0.85 J (b/R = 1/100 with a core, friction 1, push 0.101), and 283 N s at b/R = 1/300
+/// with a core, friction 1.5, push 0.100. (Sliding through the impact, as the impact
+/// resolved in its own time would have such a point slide, was tried: coupled one-way
+/// contacts made the sliding system singular, and a run's joints booked -400 J.)
+const ONE_WAY: f64 = 1e-6;
 
 /// Solves the stage's velocity, from `s.free` into `s.v`, and the candidates' impulses; its
 /// iterations are its passes. `None` if the modes did not settle or a pass's system was
@@ -131,10 +136,13 @@ struct Coulomb {
     tol_speed: f64,
 }
 
-/// The direction a 2x2 block `[[nn, nt], [nt, tt]]` responds along, where it responds along
-/// one alone ([`ONE_WAY`]): a unit vector with its first part `>= 0`.
-fn one_way(nn: f64, nt: f64, tt: f64) -> Option<[f64; 2]> {
-    if nn * tt - nt * nt > ONE_WAY * nn * tt {
+/// The direction a contact's 2x2 block `[nn, nt, tt]` responds along, where it responds
+/// along one alone ([`ONE_WAY`]; `free`, its normal's response with no row held): a unit
+/// vector with its first part `>= 0`.
+fn one_way([nn, nt, tt]: [f64; 3], free: f64) -> Option<[f64; 2]> {
+    // The block's smaller eigenvalue, to first order in it (a determinant the rounding of
+    // a held direction leaves negative is one too).
+    if (nn * tt - nt * nt) / (nn + tt) > ONE_WAY * free {
         return None;
     }
     // The block's range: its larger column.
@@ -168,7 +176,8 @@ impl Coulomb {
             } else if self.modes[i] == Mode::Stick && still(2 * i + 1) {
                 self.modes[i] = Mode::Slide(0.0);
             } else if let (Some(n), Some(t)) = (&self.columns[2 * i], &self.columns[2 * i + 1]) {
-                self.one_way[i] = one_way(n[2 * i], n[2 * i + 1], t[2 * i + 1]);
+                let free = delassus::free_response(s, &dirs[2 * i]);
+                self.one_way[i] = one_way([n[2 * i], n[2 * i + 1], t[2 * i + 1]], free);
             }
         }
     }
@@ -252,7 +261,7 @@ impl Coulomb {
     /// The unknowns the modes give: each on contact's normal impulse, and a sticking one's
     /// friction, each answering its own direction's velocity; a sliding one's friction
     /// follows its normal impulse; a sticking one-way contact ([`ONE_WAY`]) has one impulse,
-    /// along its direction, answering its normal velocity.
+    /// along its direction, answering the velocity along it.
     fn unknowns(&self, s: &Scratch) -> Vec<Unknown> {
         let mut unknowns = Vec::new();
         for (i, &mode) in self.modes.iter().enumerate() {
@@ -263,7 +272,7 @@ impl Coulomb {
             };
             match (mode, self.one_way[i]) {
                 (Mode::Off, _) => {}
-                (Mode::Stick, Some(y)) => unknowns.push(one(y, [1.0, 0.0])),
+                (Mode::Stick, Some(y)) => unknowns.push(one(y, y)),
                 (Mode::Stick, None) => {
                     unknowns.extend([one([1.0, 0.0], [1.0, 0.0]), one([0.0, 1.0], [0.0, 1.0])]);
                 }

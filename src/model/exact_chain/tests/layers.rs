@@ -243,7 +243,7 @@ fn a_pinned_piece_resting_on_the_laid_tape_near_its_pin_takes_the_least_impulse_
     // with one direction to move, the step answered with an impulse across it that the pin
     // cancelled and the regularisation alone bounded, its normal and friction work large and
     // opposite (at the thin tape's anchor, 121 N s on a 0.2 g piece; docs/bang-map.md).
-    // Bounds: the last step's impulse within 1e-6 of the least (measured within 1e-12), the
+    // Bounds: the last step's impulse within 1e-6 of the least (measured within 1e-7), the
     // rod's spin below 1e-6 rad/s, and each part of a contact's work in a step below what
     // gravity's kick gives the rod in one, m (g h)^2 (measured at a fifth of it).
     let (l, m, d, g, h) = (0.1, 0.05, 0.03, 9.81, 1e-4);
