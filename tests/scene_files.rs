@@ -83,7 +83,9 @@ fn every_plain_default_in_a_scene_file_is_the_codes() {
     for file in &files {
         let text = std::fs::read_to_string(file).unwrap();
         for (key, stated) in stated_defaults(&text) {
-            if REQUIRED.contains(&key.as_str()) {
+            // A length given in thicknesses (`solver.bang_piece_b`, `stop.bang_radius_b`)
+            // resolves into its key in metres; its comment states that key's default.
+            if REQUIRED.contains(&key.as_str()) || key.ends_with("_b") {
                 continue;
             }
             let value = key
