@@ -13,8 +13,8 @@
 //! than was asked) lets its sticking contacts slide and its sliding ones stick, as an
 //! impact's friction does where sliding would pull a slender piece into the surface
 //! (Painleve's paradox); a contact the joints hold still is left out; a contact whose point
-//! the joints leave one direction to move in sticks along that direction alone (see
-//! [`ONE_WAY`]). Where the modes do not
+//! the joints leave one direction to move in (the pinned piece's) sticks along that
+//! direction alone where its impulse went across it (see [`ONE_WAY`]). Where the modes do not
 //! settle the stage is left to Gauss-Seidel (`super::delassus::solve`), whose impulses
 //! stay bounded. Projected Gauss-Seidel alone converged slowly on the stiff, coupled
 //! contacts of tape piled on tape: on the yoga mat's bang it missed its tolerance in most
@@ -23,6 +23,7 @@
 use super::super::{ExactChain, REGULARISATION, StepError, StepReport};
 use super::active::{MAX_PASSES, Mode, Pivots, first_modes, next_mode};
 use super::delassus;
+use super::modes::Candidate;
 use super::{Scratch, position_tolerance};
 
 /// An impulse that would change its own velocity by more than this many times the largest
@@ -36,22 +37,26 @@ const WILD: f64 = 1e4;
 /// fold at a joint, where two pieces meet near the joint that joins them. (On the thin tape
 /// such blocks' determinants measure 1e-16 to 1e-13 of their diagonal's product, and up to
 /// 1e-4 where the held rows' regularisation and rounding are all that is left across the
-/// direction, a held direction's response near 1e-10 of its free one; the others' 1e-2 or
-/// more.) An impulse across that direction moves nothing: the Delassus matrix is positive
-/// semi-definite, so what is null in its own block is null in all of it. A sticking contact
-/// there asks for its velocity along its direction alone, at what its normal target asks of
-/// it, and takes its impulse along the direction: the least impulse that holds it. Beyond
-/// its friction cone it slides, as any contact does. (Holding its normal velocity alone
-/// instead asks a point that moves nearly along the surface for a velocity along its
-/// direction of the normal's over a small cosine: a run's energy rose by 2.5 times its scale
-/// at b/R = 1/100, friction 0.6, push 0.106.)
-/// Asked to hold both its rows, a contact whose targets the one direction could not meet
-/// answered with an impulse across it bounded only by the regularisation: 121 N s on a piece
-/// of 0.2 g at the thin tape's anchor, its normal and friction parts booking -0.85 J and
+/// direction; the others' 1e-2 or more.) An impulse across that direction moves nothing:
+/// the Delassus matrix is positive semi-definite, so what is null in its own block is null
+/// in all of it. Asked to stick, such a contact asks for both its rows with one direction to
+/// meet them; where its targets were not exactly consistent, the solve answered with an
+/// impulse across the direction bounded only by the regularisation: 121 N s on a piece of
+/// 0.2 g at the thin tape's anchor, its normal and friction parts booking -0.85 J and
 /// +0.85 J (b/R = 1/100 with a core, friction 1, push 0.101), and 283 N s at b/R = 1/300
-/// with a core, friction 1.5, push 0.100. (Sliding through the impact, as the impact
-/// resolved in its own time would have such a point slide, was tried: coupled one-way
-/// contacts made the sliding system singular, and a run's joints booked -400 J.)
+/// with a core, friction 1.5, push 0.100.
+///
+/// So a contact of the pinned piece whose impulse goes more across its direction than along
+/// it sticks along the direction alone, the pass solved again ([`Coulomb::across`]): one
+/// impulse along it, the least that holds the point, answering the velocity along it;
+/// beyond its friction cone it slides, as any contact does. Where the targets are consistent
+/// the impulse across is rounding, and nothing changes. Three wider mends were measured and
+/// dropped: every one-way contact, folds included, along its direction (the thin tape's
+/// pushes stopped on the overlap guard 4-6 times in 8, against 2); sliding through the
+/// impact, as the impact resolved in its own time would have such a point slide (coupled
+/// one-way contacts made the sliding system singular, and a run's joints booked -400 J);
+/// holding the normal velocity alone (a point moving nearly along the surface was asked
+/// for a large velocity along its direction, and a run's energy rose 2.5 times its scale).
 const ONE_WAY: f64 = 1e-6;
 
 /// Solves the stage's velocity, from `s.free` into `s.v`, and the candidates' impulses; its
@@ -73,6 +78,7 @@ pub(super) fn solve(
         modes: first_modes(&s.candidates),
         inert: vec![false; s.candidates.len()],
         one_way: vec![None; s.candidates.len()],
+        along: vec![false; s.candidates.len()],
         tol_speed,
     };
     let mut pivots = Pivots::default();
@@ -87,6 +93,10 @@ pub(super) fn solve(
         else {
             return Ok(None);
         };
+        if set.across(&p) {
+            // The pass again, with those contacts sticking along their direction alone.
+            continue;
+        }
         let broken = set.broken(s, &p);
         if broken.is_empty() {
             for (i, c) in s.candidates.iter_mut().enumerate() {
@@ -133,7 +143,16 @@ struct Coulomb {
     /// The one direction a contact's point may move in, as a unit combination of its normal
     /// and tangent (its normal part `>= 0`), where the joints leave it one ([`ONE_WAY`]).
     one_way: Vec<Option<[f64; 2]>>,
+    /// The one-way contacts that stick along their direction alone: those whose impulse,
+    /// asked to hold both rows, went across it ([`Coulomb::across`]).
+    along: Vec<bool>,
     tol_speed: f64,
+}
+
+/// Whether `c` is a contact of the pinned first piece with the floor or the laid tape: the
+/// one-way contacts ([`ONE_WAY`]) this solve treats as such.
+fn pinned(chain: &ExactChain, c: &Candidate) -> bool {
+    chain.pin.is_some() && c.body == 0 && c.other.is_none()
 }
 
 /// The direction a contact's 2x2 block `[nn, nt, tt]` responds along, where it responds
@@ -175,7 +194,9 @@ impl Coulomb {
                 self.inert[i] = true;
             } else if self.modes[i] == Mode::Stick && still(2 * i + 1) {
                 self.modes[i] = Mode::Slide(0.0);
-            } else if let (Some(n), Some(t)) = (&self.columns[2 * i], &self.columns[2 * i + 1]) {
+            } else if let (Some(n), Some(t)) = (&self.columns[2 * i], &self.columns[2 * i + 1])
+                && pinned(chain, &s.candidates[i])
+            {
                 let free = delassus::free_response(s, &dirs[2 * i]);
                 self.one_way[i] = one_way([n[2 * i], n[2 * i + 1], t[2 * i + 1]], free);
             }
@@ -195,6 +216,33 @@ impl Coulomb {
             }
         }
         u
+    }
+
+    /// Marks the one-way sticking contacts whose impulse in the solve `p` goes more across
+    /// their direction than along it (and more than 1e-6 of the largest normal impulse), to
+    /// stick along it alone ([`ONE_WAY`]); whether it marked any. Where the targets are
+    /// consistent the impulse across is rounding, and the solve is left as it was.
+    fn across(&mut self, p: &[f64]) -> bool {
+        let scale = (0..self.modes.len())
+            .map(|i| p[2 * i].abs())
+            .fold(0.0, f64::max);
+        let mut marked = false;
+        for i in 0..self.modes.len() {
+            let Some([y_n, y_t]) = self.one_way[i] else {
+                continue;
+            };
+            if self.modes[i] != Mode::Stick || self.along[i] {
+                continue;
+            }
+            let (p_n, p_t) = (p[2 * i], p[2 * i + 1]);
+            let along = (p_n * y_n + p_t * y_t).abs();
+            let across = (p_t * y_n - p_n * y_t).abs();
+            if across > along.max(1e-6 * scale) {
+                self.along[i] = true;
+                marked = true;
+            }
+        }
+        marked
     }
 
     /// The contacts the solve `p` breaks a condition of, each with the mode that mends it
@@ -270,7 +318,7 @@ impl Coulomb {
                 impulse,
                 equation,
             };
-            match (mode, self.one_way[i]) {
+            match (mode, self.one_way[i].filter(|_| self.along[i])) {
                 (Mode::Off, _) => {}
                 (Mode::Stick, Some(y)) => unknowns.push(one(y, y)),
                 (Mode::Stick, None) => {
