@@ -98,12 +98,13 @@ pub struct Solver {
     /// No link is shed there, so the rolling rule (`steps_per_link`) no longer applies.
     pub bang_step_rad: f64,
     /// A bound on the error of the final bang's steps on the exact chain, as a share of
-    /// energy (default: none, the steps unbounded). The joints of an ideal chain do no
-    /// work, so the work they do in a step is its error: a step whose error would take the
-    /// bang's sum past this share of the energy in play (what it has dissipated and what
-    /// still moves), and is over this share of the energy the step itself moved, is taken
-    /// again in halves; `bang_step_rad` stays the longest step (docs/final-bang.md, "A
-    /// tolerance on the bang's steps", with its cost). Dimensionless, > 0 and <= 1.
+    /// energy (default: none, written `"off"`, the steps unbounded). The joints of an ideal
+    /// chain do no work, so the work they do in a step is its error: a step whose error
+    /// would take the bang's sum past this share of the energy in play (what it has
+    /// dissipated and what still moves), and is over this share of the energy the step
+    /// itself moved, is taken again in halves; `bang_step_rad` stays the longest step
+    /// (docs/final-bang.md, "A tolerance on the bang's steps", with its cost).
+    /// Dimensionless, > 0 and <= 1.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bang_tolerance: Option<f64>,
     /// Rapier solver iterations per step in the final bang, count (default: 24). Its impacts

@@ -135,7 +135,6 @@ fn bang_summary(
             b.residual_j,
             of(b.residual_j)
         );
-        moves_line(o, bang, b.joints_j, of);
         let _ = writeln!(
             o,
             "  one landing: a landing is chaotic, and the split's mean and its standard error \
@@ -367,28 +366,5 @@ fn health_summary(o: &mut String, report: &RunReport) {
                 l.detail
             );
         }
-    }
-}
-
-/// Where the bang's steps were bounded (`solver.bang_tolerance`), the joints' part
-/// (`joints_j`) split into what the moves by position cost them and the steps' own error,
-/// which is the bounded one; `of` gives a share of what the bang dissipated. Nothing
-/// where no move was booked apart (the steps unbounded).
-fn moves_line(
-    o: &mut String,
-    bang: &crate::run::BangReport,
-    joints_j: f64,
-    of: impl Fn(f64) -> f64,
-) {
-    let moves = -bang.solve.projection_j;
-    if moves != 0.0 {
-        let own = joints_j - moves;
-        let _ = writeln!(
-            o,
-            "  of the joints': the moves out of the floor and the layers {moves:.5} J ({:.3} %), \
-             the steps' own error {own:.5} J ({:.3} %), the part solver.bang_tolerance acts on",
-            of(moves),
-            of(own)
-        );
     }
 }

@@ -74,6 +74,9 @@ const DEFAULT_ITERATIONS: i64 = 4;
 const DEFAULT_FREEZE_SPEED_M_S: f64 = 0.001;
 /// Default `solver.bang_step_rad`.
 const DEFAULT_BANG_STEP_RAD: f64 = 0.15;
+/// The word for `solver.bang_tolerance` that leaves the bang's steps unbounded: its
+/// default.
+pub(super) const TOLERANCE_OFF: &str = "off";
 /// Default `solver.contact_hz`.
 const DEFAULT_CONTACT_HZ: f64 = 1.0e4;
 /// Default `solver.joint_hz`.
@@ -197,6 +200,15 @@ impl Default for PushFile {
     }
 }
 
+/// `solver.bang_tolerance` as written: a number, or a word (only [`TOLERANCE_OFF`] is
+/// valid).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+pub(super) enum ToleranceFile {
+    Share(f64),
+    Word(String),
+}
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub(super) struct SolverFile {
@@ -205,8 +217,8 @@ pub(super) struct SolverFile {
     pub(super) iterations: i64,
     pub(super) freeze_speed_m_s: f64,
     pub(super) bang_step_rad: f64,
-    /// `None`: the bang's steps are not bounded in their error.
-    pub(super) bang_tolerance: Option<f64>,
+    /// A share of energy, or [`TOLERANCE_OFF`] (any other word is refused by validation).
+    pub(super) bang_tolerance: ToleranceFile,
     pub(super) bang_iterations: i64,
     pub(super) bang_relax_iterations: i64,
     /// `None` means "the tape's thickness" (see [`crate::scene::Solver::bang_piece_m`]).
@@ -227,7 +239,7 @@ impl Default for SolverFile {
             iterations: DEFAULT_ITERATIONS,
             freeze_speed_m_s: DEFAULT_FREEZE_SPEED_M_S,
             bang_step_rad: DEFAULT_BANG_STEP_RAD,
-            bang_tolerance: None,
+            bang_tolerance: ToleranceFile::Word(TOLERANCE_OFF.into()),
             bang_iterations: DEFAULT_BANG_ITERATIONS,
             bang_relax_iterations: DEFAULT_BANG_RELAX_ITERATIONS,
             bang_piece_m: None,
@@ -452,7 +464,7 @@ mod tests {
                 "output.sample_interval_s" => "0.001",
                 "solver.steps_per_link" | "solver.iterations" => "4",
                 "solver.bang_step_rad" => "0.15",
-                "solver.bang_tolerance" => "1e-3",
+                "solver.bang_tolerance" => "off",
                 "solver.bang_iterations" => "24",
                 "solver.bang_relax_iterations" => "1",
                 "solver.bang_piece_m" => "0.005",
@@ -469,13 +481,8 @@ mod tests {
                 "output.scene_rate_hz" => "100",
                 other => panic!("no value for {other}: add it here"),
             };
-            let mut s = scene_with_overrides(MINIMAL, "t", &[Override::new(key, value)])
+            let s = scene_with_overrides(MINIMAL, "t", &[Override::new(key, value)])
                 .unwrap_or_else(|e| panic!("{key} = {value}: {e}"));
-            // The one key whose default is its absence: set, it is the value given.
-            if *key == "solver.bang_tolerance" {
-                assert_eq!(s.solver.bang_tolerance, Some(1e-3));
-                s.solver.bang_tolerance = None;
-            }
             assert_eq!(
                 Scene {
                     source_text: String::new(),

@@ -9,7 +9,8 @@ use std::ops::RangeInclusive;
 
 use crate::scene::budget::{self, MAX_LINKS};
 use crate::scene::file::{
-    DiscretisationFile, FloorFile, OutputFile, PushFile, SceneFile, SolverFile, StopFile, TapeFile,
+    DiscretisationFile, FloorFile, OutputFile, PushFile, SceneFile, SolverFile, StopFile,
+    TOLERANCE_OFF, TapeFile, ToleranceFile,
 };
 use crate::scene::rules::{MIDPOINT_RETIRED, Shown, check, check_int, invalid, name};
 use crate::scene::{
@@ -272,17 +273,7 @@ fn solver(s: &SolverFile, tape: &Tape) -> Result<Solver, SceneError> {
             s.bang_step_rad > 0.0 && s.bang_step_rad <= 1.0,
             "must be > 0 and <= 1",
         )?,
-        bang_tolerance: s
-            .bang_tolerance
-            .map(|t| {
-                check(
-                    "solver.bang_tolerance",
-                    t,
-                    t > 0.0 && t <= 1.0,
-                    "must be > 0 and <= 1",
-                )
-            })
-            .transpose()?,
+        bang_tolerance: tolerance(&s.bang_tolerance)?,
         bang_iterations: check_int(
             "solver.bang_iterations",
             s.bang_iterations,
@@ -316,6 +307,19 @@ fn solver(s: &SolverFile, tape: &Tape) -> Result<Solver, SceneError> {
             }
         },
     })
+}
+
+/// `solver.bang_tolerance`: a share of energy, > 0 and <= 1, or `"off"` for steps whose
+/// error is not bounded (`None`).
+fn tolerance(t: &ToleranceFile) -> Result<Option<f64>, SceneError> {
+    const RULE: &str = "must be > 0 and <= 1, or \"off\"";
+    match t {
+        ToleranceFile::Share(t) => {
+            check("solver.bang_tolerance", *t, *t > 0.0 && *t <= 1.0, RULE).map(Some)
+        }
+        ToleranceFile::Word(w) if w == TOLERANCE_OFF => Ok(None),
+        ToleranceFile::Word(w) => Err(invalid("solver.bang_tolerance", format!("{w:?}"), RULE)),
+    }
 }
 
 /// The error for a length given both in metres (`{stem}_m`, its value `m`) and in the

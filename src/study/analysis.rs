@@ -17,7 +17,7 @@ mod rows;
 use std::collections::BTreeMap;
 
 pub use self::bang::{
-    BANG_OBSERVABLES, BangStudy, NUMERICAL, NUMERICAL_MARK, Reading, bang_studies,
+    BANG_COST, BANG_OBSERVABLES, BangStudy, NUMERICAL, NUMERICAL_MARK, Reading, bang_studies,
 };
 pub use self::ensemble::{Ensemble, Pooled};
 pub use self::fit::{PowerFit, fit_power, is_resolution, pareto_front, step_size};

@@ -93,7 +93,7 @@ impl Model {
         };
         match stepped {
             Ok(report) => {
-                exact.budget.spent_j += report.step_error_j();
+                exact.budget.spent_j += report.joint_error_j();
                 std::mem::swap(&mut exact.before.0, &mut exact.pending);
                 exact.before.1 = dt;
                 exact.stats.add(&report);
@@ -139,9 +139,9 @@ impl Model {
     }
 
     /// The error the bang's next step may make, within `tolerance` (`solver.bang_tolerance`)
-    /// with `kinetic_j` still moving. The error, the joints' work less what moves by
-    /// position cost them ([`exact_chain::StepReport::step_error_j`]), summed over the
-    /// bang's steps, is held within the tolerance times the energy in play: what the bang
+    /// with `kinetic_j` still moving. The error, the joints' work
+    /// ([`exact_chain::StepReport::joint_error_j`], the ledger's numerical part), summed
+    /// over the bang's steps, is held within the tolerance times the energy in play: what the bang
     /// has dissipated and what still moves. At rest nothing moves, and the sum's share of
     /// what the bang dissipated is within the tolerance; before the first impacts the
     /// budget is already the tolerance of what they will dissipate (the yoga mat's joints

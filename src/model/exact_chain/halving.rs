@@ -47,7 +47,7 @@ impl ExactChain {
                 self.warm = warm;
                 self.layer_warm = layer_warm;
                 return Err(StepError::Inaccurate {
-                    error_j: report.step_error_j(),
+                    error_j: report.joint_error_j(),
                     moved_j: report.moved_j,
                     least_j: b.least_j,
                     most_j: b.most_j,

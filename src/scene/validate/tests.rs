@@ -106,6 +106,37 @@ fn non_finite_rejected() {
 }
 
 #[test]
+fn the_bang_s_tolerance_is_a_share_or_off() {
+    let tolerance = |value: &str| {
+        let text = with("solver", "bang_tolerance", value);
+        Scene::from_toml_str(&text, "t")
+            .unwrap()
+            .solver
+            .bang_tolerance
+    };
+    assert_eq!(tolerance("1e-3"), Some(1e-3));
+    assert_eq!(tolerance("\"off\""), None);
+    // Off by default.
+    assert_eq!(
+        Scene::from_toml_str(MINIMAL, "t")
+            .unwrap()
+            .solver
+            .bang_tolerance,
+        None
+    );
+    let msg = rejects("solver", "bang_tolerance", "\"on\"");
+    assert_eq!(
+        msg,
+        "solver.bang_tolerance = \"on\": must be > 0 and <= 1, or \"off\""
+    );
+    let msg = rejects("solver", "bang_tolerance", "0.0");
+    assert_eq!(
+        msg,
+        "solver.bang_tolerance = 0: must be > 0 and <= 1, or \"off\""
+    );
+}
+
+#[test]
 fn numeric_rules() {
     let msg = rejects("tape", "thickness_m", "-0.001");
     assert!(

@@ -5,7 +5,7 @@
 
 use std::collections::BTreeMap;
 
-use super::{PowerFit, fit_power, fitting_rows, is_resolution, step_size, tied_keys};
+use super::{PowerFit, fit_power, fitting_rows, is_resolution, pareto_front, step_size, tied_keys};
 use crate::study::sweep::{Col, SweepTable};
 
 /// How a bang study reads an observable from a sweep row.
@@ -23,7 +23,7 @@ pub enum Reading {
 
 /// The final bang's observables a bang study follows: a label and how to read it from a
 /// sweep row (`NaN` where the run has no bang).
-pub const BANG_OBSERVABLES: [(&str, Reading); 14] = [
+pub const BANG_OBSERVABLES: [(&str, Reading); 15] = [
     ("dissipated / kinetic in", Reading::DissipatedOfKineticIn),
     (
         "floor impacts share",
@@ -59,7 +59,11 @@ pub const BANG_OBSERVABLES: [(&str, Reading); 14] = [
         "still moving / kinetic in",
         Reading::Column(Col::BangStillMovingOf),
     ),
+    ("bang wall (s)", Reading::Column(Col::BangWall)),
 ];
+
+/// The bang's cost in a bang study's front: its engine time, s.
+pub const BANG_COST: Reading = Reading::Column(Col::BangWall);
 
 /// A setting whose numerical share (joints and residual, of what the bang dissipated)
 /// exceeds this in size is marked in the tables and the pictures: its split is not the
@@ -208,12 +212,47 @@ pub(super) fn observed(table: &SweepTable) -> Option<(Vec<Vec<f64>>, Vec<bool>)>
 impl BangStudy {
     /// Whether setting `i`'s numerical share exceeds [`NUMERICAL_MARK`] in size.
     pub fn numerical_marked(&self, i: usize) -> bool {
-        let k = BANG_OBSERVABLES
-            .iter()
-            .position(|o| o.1 == NUMERICAL)
-            .expect("the numerical share is observed");
-        self.mean[k][i].abs() > NUMERICAL_MARK
+        self.mean[observable(NUMERICAL)][i].abs() > NUMERICAL_MARK
     }
+
+    /// The bang's speed against its error: per setting, its mean engine time (s,
+    /// [`BANG_COST`]) and the size of its mean numerical share, each with its standard
+    /// error.
+    pub fn speed_and_error(&self) -> Vec<[f64; 4]> {
+        let (c, e) = (observable(BANG_COST), observable(NUMERICAL));
+        (0..self.values.len())
+            .map(|i| {
+                [
+                    self.mean[c][i],
+                    self.se[c][i],
+                    self.mean[e][i].abs(),
+                    self.se[e][i],
+                ]
+            })
+            .collect()
+    }
+
+    /// The settings on the bang's Pareto front, cheapest first: those no other setting
+    /// beats both in its mean engine time and in the size of its mean numerical share. Empty
+    /// for a physical key's study or the pooled ensemble: their settings are no steps to
+    /// choose between.
+    pub fn front(&self) -> Vec<usize> {
+        if self.physical || self.pooled {
+            return Vec::new();
+        }
+        let points = self.speed_and_error();
+        let cost: Vec<f64> = points.iter().map(|p| p[0]).collect();
+        let err: Vec<f64> = points.iter().map(|p| p[2]).collect();
+        pareto_front(&cost, &err)
+    }
+}
+
+/// The index of `reading` in [`BANG_OBSERVABLES`].
+pub(crate) fn observable(reading: Reading) -> usize {
+    BANG_OBSERVABLES
+        .iter()
+        .position(|o| o.1 == reading)
+        .expect("an observed reading")
 }
 
 /// The bang study of `key` in one group: `by_value` holds the rows of each setting (by the

@@ -107,6 +107,38 @@ impl BangStudy {
             "| order of the change from the finest | | {} |",
             orders.join(" | ")
         );
+        o.push_str(&self.front_markdown());
+        o
+    }
+
+    /// The bang's speed against its error: each setting's engine time and numerical share,
+    /// and whether it is on the front ([`BangStudy::front`]).
+    fn front_markdown(&self) -> String {
+        let mut o = String::new();
+        let front = self.front();
+        let _ = writeln!(
+            o,
+            "\nThe bang's speed against its error (`pareto-bang-{}.svg`): each setting's \
+             bang engine time and the size of its numerical share, mean ± standard error; \
+             on the front where no other setting is both faster and more accurate.\n",
+            self.key
+        );
+        let _ = writeln!(
+            o,
+            "| {} | bang wall (s) | numerical share | on the front |",
+            self.key
+        );
+        let _ = writeln!(o, "|---|---|---|---|");
+        for (i, p) in self.speed_and_error().iter().enumerate() {
+            let _ = writeln!(
+                o,
+                "| {} | {} | {} | {} |",
+                self.values[i],
+                show_mean(p[0], p[1]),
+                show_mean(p[2], p[3]),
+                if front.contains(&i) { "yes" } else { "" }
+            );
+        }
         o
     }
 }
@@ -490,47 +522,4 @@ fn settings_cells(t: &SweepTable, keys: &[String], r: usize) -> String {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A physical key's study of two settings whose numerical shares are `numerical`.
-    fn study(numerical: [f64; 2]) -> BangStudy {
-        let n = BANG_OBSERVABLES.len();
-        let k = BANG_OBSERVABLES
-            .iter()
-            .position(|o| o.1 == NUMERICAL)
-            .unwrap();
-        let mut mean = vec![vec![0.5, 0.5]; n];
-        mean[k] = numerical.to_vec();
-        BangStudy {
-            key: "floor.friction".into(),
-            tied: vec!["solver.bang_step_rad".into()],
-            group: String::new(),
-            physical: true,
-            values: vec![0.3, 1.0],
-            h: vec![0.3, 1.0],
-            n: vec![8, 8],
-            mean,
-            se: vec![vec![0.01, 0.01]; n],
-            fit: vec![None; n],
-            pooled: false,
-        }
-    }
-
-    #[test]
-    fn a_setting_whose_numerical_share_exceeds_the_mark_is_marked_not_dropped() {
-        let md = study([0.004, -0.02]).markdown();
-        assert!(md.contains("| 0.3 | 8 |"), "{md}");
-        assert!(md.contains("| 1 (!) | 8 |"), "{md}");
-        assert!(
-            md.contains("(!): the numerical share exceeds 1 % in size"),
-            "{md}"
-        );
-        assert!(
-            md.contains("varied together with `solver.bang_step_rad`"),
-            "{md}"
-        );
-        let md = study([0.004, 0.0099]).markdown();
-        assert!(!md.contains("(!)"), "{md}");
-    }
-}
+mod tests;

@@ -336,8 +336,87 @@ fn bang_plots(a: &SweepAnalysis, dir: &Path, title: &str) -> anyhow::Result<Vec<
         let path = dir.join(format!("{stem}.svg"));
         bang_study_plot(&path, b, title)?;
         written.push(path);
+        let path = dir.join(format!("pareto-{stem}.svg"));
+        bang_pareto_plot(&path, b, title)?;
+        written.push(path);
     }
     Ok(written)
+}
+
+/// `path`: the bang's speed against its error in one study, log-log: each setting's
+/// numerical share (its size, ± its standard error) against its bang engine time, each
+/// named by its value and its runs (those that ran to their end), the front joined.
+fn bang_pareto_plot(path: &Path, b: &BangStudy, title: &str) -> anyhow::Result<()> {
+    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let points = b.speed_and_error();
+    let shown: Vec<usize> = (0..points.len())
+        .filter(|&i| points[i][0] > 0.0 && points[i][2] > 0.0)
+        .filter(|&i| points[i][0].is_finite() && points[i][2].is_finite())
+        .collect();
+    let group = if b.group.is_empty() {
+        String::new()
+    } else {
+        format!(", {}", b.group)
+    };
+    let mut chart = log_chart(
+        &root,
+        &format!(
+            "{title}: the bang's error against its engine time, {}{group}",
+            b.key
+        ),
+        "bang wall time (s), mean of the ensemble",
+        "|numerical share| of what the bang dissipated",
+        shown.iter().map(|&i| points[i][0]),
+        shown
+            .iter()
+            .flat_map(|&i| [points[i][2], points[i][2] + points[i][3].max(0.0)]),
+    )?;
+    let mut drawn = Drawn::default();
+    // The bars: mean ± standard error, the lower end kept on the log axis.
+    chart
+        .draw_series(shown.iter().map(|&i| {
+            let [c, _, e, se] = points[i];
+            let se = if se.is_finite() { se } else { 0.0 };
+            ErrorBar::new_vertical(c, (e - se).max(e / 10.0), e, e + se, SIM.filled(), 6)
+        }))
+        .map_err(err)?;
+    let pts: Vec<(f64, f64)> = shown
+        .iter()
+        .map(|&i| (points[i][0], points[i][2]))
+        .collect();
+    draw_markers(
+        &mut chart,
+        &mut drawn,
+        &pts,
+        SIM.filled(),
+        format!("a setting of {} (mean ± standard error)", b.key),
+    )?;
+    chart
+        .draw_series(shown.iter().map(|&i| {
+            Text::new(
+                format!("{} ({} runs)", b.values[i], b.n[i]),
+                (points[i][0], points[i][2]),
+                font(DESC_PX),
+            )
+        }))
+        .map_err(err)?;
+    let front: Vec<(f64, f64)> = b
+        .front()
+        .into_iter()
+        .filter(|i| shown.contains(i))
+        .map(|i| (points[i][0], points[i][2]))
+        .collect();
+    draw_line(
+        &mut chart,
+        &mut drawn,
+        front,
+        Line::solid(BLACK, 1),
+        "Pareto front",
+    )?;
+    legend(&mut chart, &drawn)?;
+    root.present().map_err(err)?;
+    Ok(())
 }
 
 /// One panel per bang observable: its ensemble mean ± standard error against the step h

@@ -21,7 +21,7 @@ fn bounded_run(chain: &mut ExactChain, h: f64, budget_j: f64, tolerance: f64) ->
             bound.holds(&report) || report.pieces > 1,
             "an unhalved step outside its bound: {report:?}"
         );
-        spent += report.step_error_j();
+        spent += report.joint_error_j();
         halvings += u64::from(report.pieces - 1);
         worst = worst.max((chain.kinetic_j() - e0).abs());
     }
