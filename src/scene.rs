@@ -98,7 +98,7 @@ pub struct Solver {
     /// No link is shed there, so the rolling rule (`steps_per_link`) no longer applies.
     pub bang_step_rad: f64,
     /// A bound on the error of the final bang's steps on the exact chain, as a share of
-    /// energy (default: none, written `"off"`, the steps unbounded). The joints of an ideal
+    /// energy (default: 1e-3; none, written `"off"`, leaves the steps unbounded). The joints of an ideal
     /// chain do no work, so the work they do in a step is its error: a step whose error
     /// would take the bang's sum past this share of the energy in play (what it has
     /// dissipated and what still moves), and is over this share of the energy the step

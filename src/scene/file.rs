@@ -74,8 +74,9 @@ const DEFAULT_ITERATIONS: i64 = 4;
 const DEFAULT_FREEZE_SPEED_M_S: f64 = 0.001;
 /// Default `solver.bang_step_rad`.
 const DEFAULT_BANG_STEP_RAD: f64 = 0.15;
-/// The word for `solver.bang_tolerance` that leaves the bang's steps unbounded: its
-/// default.
+/// Default `solver.bang_tolerance`.
+const DEFAULT_BANG_TOLERANCE: f64 = 1e-3;
+/// The word for `solver.bang_tolerance` that leaves the bang's steps unbounded.
 pub(super) const TOLERANCE_OFF: &str = "off";
 /// Default `solver.contact_hz`.
 const DEFAULT_CONTACT_HZ: f64 = 1.0e4;
@@ -239,7 +240,7 @@ impl Default for SolverFile {
             iterations: DEFAULT_ITERATIONS,
             freeze_speed_m_s: DEFAULT_FREEZE_SPEED_M_S,
             bang_step_rad: DEFAULT_BANG_STEP_RAD,
-            bang_tolerance: ToleranceFile::Word(TOLERANCE_OFF.into()),
+            bang_tolerance: ToleranceFile::Share(DEFAULT_BANG_TOLERANCE),
             bang_iterations: DEFAULT_BANG_ITERATIONS,
             bang_relax_iterations: DEFAULT_BANG_RELAX_ITERATIONS,
             bang_piece_m: None,
@@ -464,7 +465,7 @@ mod tests {
                 "output.sample_interval_s" => "0.001",
                 "solver.steps_per_link" | "solver.iterations" => "4",
                 "solver.bang_step_rad" => "0.15",
-                "solver.bang_tolerance" => "off",
+                "solver.bang_tolerance" => "1e-3",
                 "solver.bang_iterations" => "24",
                 "solver.bang_relax_iterations" => "1",
                 "solver.bang_piece_m" => "0.005",

@@ -116,13 +116,13 @@ fn the_bang_s_tolerance_is_a_share_or_off() {
     };
     assert_eq!(tolerance("1e-3"), Some(1e-3));
     assert_eq!(tolerance("\"off\""), None);
-    // Off by default.
+    // 1e-3 by default.
     assert_eq!(
         Scene::from_toml_str(MINIMAL, "t")
             .unwrap()
             .solver
             .bang_tolerance,
-        None
+        Some(1e-3)
     );
     let msg = rejects("solver", "bang_tolerance", "\"on\"");
     assert_eq!(
