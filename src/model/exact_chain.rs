@@ -243,8 +243,9 @@ pub struct ExactChain {
     fresh: bool,
     /// Whether the steps are bounded in their joints' error ([`Self::step_bounded`]): then
     /// a gap the joints start a step with is closed by position, not by the drift's
-    /// velocity, and what a move by position costs the joints is booked apart
-    /// ([`StepReport::projection_j`]), as neither is the step's own error.
+    /// velocity, and after a move by position the drift's velocity is held to the joints
+    /// again, what that takes reported as [`StepReport::projection_j`] (part of the joints'
+    /// work, which the bound counts whole).
     bounded: bool,
     /// Where the steps are bounded, the depth of halving a step starts at: one less than the
     /// deepest part of the last step, so a step grows back by one halving a step and the

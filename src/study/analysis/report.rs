@@ -118,7 +118,8 @@ impl BangStudy {
         let front = self.front();
         let _ = writeln!(
             o,
-            "\nThe bang's speed against its error (`pareto-bang-{}.svg`): each setting's \
+            "\nThe bang's speed against its error (`pareto-bang-{}.svg`, numbered where the key \
+             has several studies): each setting's \
              bang engine time and the size of its numerical share, mean ± standard error; \
              on the front where no other setting is both faster and more accurate.\n",
             self.key

@@ -1,14 +1,13 @@
 //! The report's tables: a marked setting, and the bang's speed against its error.
 
 use super::*;
+use crate::study::analysis::BANG_COST;
+use crate::study::analysis::bang::observable;
 
 /// A physical key's study of two settings whose numerical shares are `numerical`.
 fn study(numerical: [f64; 2]) -> BangStudy {
     let n = BANG_OBSERVABLES.len();
-    let k = BANG_OBSERVABLES
-        .iter()
-        .position(|o| o.1 == NUMERICAL)
-        .unwrap();
+    let k = observable(NUMERICAL);
     let mut mean = vec![vec![0.5, 0.5]; n];
     mean[k] = numerical.to_vec();
     BangStudy {
@@ -58,8 +57,8 @@ fn a_tolerance_s_settings_are_ranked_by_the_bang_s_engine_time_and_error() {
     b.mean = vec![vec![0.5; 3]; n];
     b.se = vec![vec![0.01; 3]; n];
     b.fit = vec![None; n];
-    b.mean[super::super::bang::observable(NUMERICAL)] = vec![0.004, -0.003, 0.001];
-    b.mean[super::super::bang::observable(super::super::BANG_COST)] = vec![1.0, 5.0, 3.0];
+    b.mean[observable(NUMERICAL)] = vec![0.004, -0.003, 0.001];
+    b.mean[observable(BANG_COST)] = vec![1.0, 5.0, 3.0];
     assert_eq!(b.front(), vec![0, 2]);
     let md = b.markdown();
     assert!(
