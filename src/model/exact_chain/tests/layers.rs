@@ -301,3 +301,82 @@ fn a_pinned_piece_resting_on_the_laid_tape_near_its_pin_takes_the_least_impulse_
         "a contact's work {work:e} J in a step, above {kick:e} J"
     );
 }
+
+#[test]
+fn a_tape_folded_over_itself_on_the_floor_carries_its_weight_and_stays() {
+    // A Z-fold at rest: 40 links flat on the floor, one standing at the fold, 10 lying back
+    // on the first ones, a thickness (2 R) above them. Its 80-odd floor points take the
+    // banded active set, the top layer's touches on the bottom its border (a contact
+    // between two bodies far apart along the chain). Each step, the floor carries the
+    // whole weight (within 1e-6), the top layer rests on the bottom, and nothing moves
+    // (velocities below 1e-9 m/s, kinetic energy below 1e-20 J).
+    let (l, m, g, h) = (0.01, 0.001, 9.81, 1e-4);
+    let (bottom, top) = (40, 10);
+    let mut bodies = Vec::new();
+    let (mut outlines, mut points) = (Vec::new(), Vec::new());
+    let mut arc = 0.0;
+    let mut piece = |length: f64, at: [f64; 2], angle_rad: f64| {
+        let mut body = rod(m * length / l, length, at, [0.0, 0.0], 0.0);
+        body.angle_rad = angle_rad;
+        bodies.push(body);
+        outlines.push(outline(length, arc));
+        points.push(vec![[-0.5 * length, 0.0], [0.5 * length, 0.0]]);
+        arc += length;
+    };
+    for k in 0..bottom {
+        piece(l, [(k as f64 + 0.5) * l, R], 0.0);
+    }
+    let end = bottom as f64 * l;
+    piece(2.0 * R, [end, 2.0 * R], std::f64::consts::FRAC_PI_2);
+    for k in 0..top {
+        piece(
+            l,
+            [end - (k as f64 + 0.5) * l, 3.0 * R],
+            std::f64::consts::PI,
+        );
+    }
+    let joints: Vec<Joint> = outlines
+        .windows(2)
+        .map(|w| Joint {
+            prev: w[0].nodes[1],
+            next: w[1].nodes[0],
+        })
+        .collect();
+    let mass: f64 = bodies.iter().map(|b| b.mass_kg).sum();
+    let mut chain = ExactChain::new(bodies, joints, None, TOLERANCE);
+    chain.set_floor(level_floor(0.5), &points);
+    chain.set_layers(layers(0.5, outlines, Outline::default()));
+    for _ in 0..20 {
+        let report = chain.step(h, [0.0, -g]).expect("solves");
+        assert!(report.converged, "{report:?}");
+        let on = |floor: bool| {
+            chain
+                .contacts()
+                .iter()
+                .filter(|c| (c.on == Surface::Floor) == floor)
+                .map(|c| c.normal_n_s[1])
+                .sum::<f64>()
+        };
+        let (up, weight) = (on(true), mass * g * h);
+        assert!(
+            (up / weight - 1.0).abs() < 1e-6,
+            "{up:e} against {weight:e}"
+        );
+        let layer = on(false);
+        assert!(layer > 0.0, "the top layer never touched the bottom one");
+        println!(
+            "{} passes: the floor {:.9} of the weight, the layers {layer:.3e} N s",
+            report.iterations,
+            up / weight
+        );
+    }
+    for b in chain.bodies() {
+        let [u, w] = b.velocity_m_s;
+        assert!(u.abs().max(w.abs()) < 1e-9, "{b:?}");
+    }
+    let kinetic = chain.kinetic_j();
+    assert!(
+        kinetic < 1e-20,
+        "kinetic {kinetic:e} J, expected 0 within 1e-20 J"
+    );
+}
