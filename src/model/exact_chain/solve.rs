@@ -6,7 +6,6 @@
 use super::{ContactImpulse, ExactChain, StepError, StepReport, Surface};
 
 mod active;
-mod border;
 mod delassus;
 mod dense;
 mod layers;
@@ -186,15 +185,16 @@ fn impulses(
     for _ in 0..4 {
         // Few contacts: the active set on their Delassus matrix where the tape has its
         // thickness (Gauss-Seidel converges slowly on tape piled on laid tape), else
-        // Gauss-Seidel. Many: the active set in the joints' band, the contacts between two
-        // bodies (the tape's layers), whose rows would break the band, as its border
-        // (`border`); the dense active set's direct solves grow as the cube of all the
+        // Gauss-Seidel. Many: the active set in the joints' band, unless a contact joins
+        // two bodies (the tape's layers), whose rows would break the band; then
+        // Gauss-Seidel, as the dense active set's direct solves grow as the cube of the
         // contacts (on the frictionless coil, 300 contacts, 0.3 s a stage). Gauss-Seidel
         // wherever an active set's modes did not settle.
         let few = s.candidates.len() < active::FROM_CONTACTS;
+        let pairs = s.candidates.iter().any(|c| c.other.is_some());
         let settled = if few && chain.layers.is_some() && !s.candidates.is_empty() {
             dense::solve(chain, s)?
-        } else if !few {
+        } else if !few && !pairs {
             active::solve(chain, s)?
         } else {
             None

@@ -4,9 +4,7 @@
 //! contact's rows touch only its own body, so they join that body's block and the system
 //! stays block-tridiagonal: each pass is one direct solve, linear in the bodies and the
 //! contacts, where solving the contacts against the chain's response
-//! (`super::delassus`) costs `O(k N)` to set up and `O(k^2)` a sweep. A contact between two
-//! bodies (the tape's layers on each other) would break the band: its rows are the band's
-//! border, solved by their Schur complement (`super::border`), the modes chosen alike. The modes start from
+//! (`super::delassus`) costs `O(k N)` to set up and `O(k^2)` a sweep. The modes start from
 //! the last stage's impulses and change where a pass breaks a condition (a normal impulse
 //! pulling, friction outside its cone, a slip friction would not oppose, a free point
 //! going below its target); they settle in a pass or two where the contacts change little.
@@ -19,7 +17,7 @@
 use super::super::{ExactChain, REGULARISATION, StepError, StepReport};
 use super::modes::Candidate;
 use super::rows::{self, Row, Stage, dot3, one, weighted};
-use super::{Scratch, border, position_tolerance};
+use super::{Scratch, position_tolerance};
 
 /// The fewest contact points a stage must have for the active set to solve it; fewer are
 /// left to Gauss-Seidel, whose `O(k N + k^2)` is then cheap. (On the thin tape, where a
@@ -135,13 +133,15 @@ impl Pivots {
 }
 
 /// Solves the stage's velocity, from `s.free` into `s.v`, and the candidates' impulses; its
-/// iterations are its passes. `None` if the modes did not settle, or the contacts between
-/// two bodies that are on were more than the border takes ([`border::MAX_ROWS`]) or left it
-/// singular (nothing is kept then).
+/// iterations are its passes. `None` if the modes did not settle (nothing is kept then), or
+/// where a contact joins two bodies: its rows would break the band.
 pub(super) fn solve(
     chain: &mut ExactChain,
     s: &mut Scratch,
 ) -> Result<Option<StepReport>, StepError> {
+    if s.candidates.iter().any(|c| c.other.is_some()) {
+        return Ok(None);
+    }
     let tol_speed = position_tolerance(chain) / s.h;
     s.base.clone_from(&s.free);
     // The joints held with no contact: what the contacts' impulses act from.
@@ -156,17 +156,9 @@ pub(super) fn solve(
     let mut pivots = Pivots::default();
     for pass in 1..=MAX_PASSES {
         set.rows(s);
-        if set.border.len() > border::MAX_ROWS {
-            return Ok(None);
-        }
         rows::build(chain, s, Stage::Impulses, &set.extra);
         rows::solve(chain, s)?;
-        let Some(y) = border::solve(chain, s, &set.border) else {
-            return Ok(None);
-        };
-        set.y = y;
         rows::apply(s);
-        border::apply(s, &set.border, &set.y);
         let broken = set.broken(s, tol_speed);
         if broken.is_empty() {
             set.keep(s);
@@ -186,21 +178,9 @@ pub(super) fn solve(
 /// The candidates' modes, and the rows they give.
 struct ActiveSet {
     modes: Vec<Mode>,
-    /// Each candidate's first row, if it has one.
-    first: Vec<Option<Place>>,
-    /// The rows of the contacts on one body (the floor's, the laid tape's), in the band.
+    /// Each candidate's first row among `extra`, if it has one.
+    first: Vec<Option<usize>>,
     extra: Vec<Row>,
-    /// The rows of the contacts between two bodies, the band's border (`super::border`),
-    /// and their impulses in the last solve.
-    border: Vec<Row>,
-    y: Vec<f64>,
-}
-
-/// Where a candidate's rows are: from this index of `extra` or of `border`.
-#[derive(Debug, Clone, Copy)]
-enum Place {
-    Band(usize),
-    Border(usize),
 }
 
 impl ActiveSet {
@@ -210,69 +190,39 @@ impl ActiveSet {
             modes: first_modes(&s.candidates),
             first: vec![None; s.candidates.len()],
             extra: Vec::new(),
-            border: Vec::new(),
-            y: Vec::new(),
         }
     }
 
-    /// The rows of the contacts that are on, in the candidates' order (their bodies'): a
-    /// contact on one body in its body's block, one between two bodies in the border.
+    /// The rows of the contacts that are on, in the candidates' order (their bodies').
     fn rows(&mut self, s: &Scratch) {
         self.extra.clear();
-        self.border.clear();
         for ((c, mode), first) in s.candidates.iter().zip(&self.modes).zip(&mut self.first) {
-            let (mu, other) = (c.mu, c.other.unwrap_or(c.body));
-            let ([kn, kn_o], [kt, kt_o]) = (c.row(c.n).into(), c.row(c.t()).into());
-            let (w, w_o) = (s.inv[c.body], s.inv[other]);
-            let row = |k: [[f64; 3]; 2], d: [[f64; 3]; 2], target: f64| {
-                let mut row = one(c.body, k[0], d[0]);
-                row.reg = weighted(k[0], w, k[0]);
-                if c.other.is_some() {
-                    (row.body[1], row.count, row.k[1], row.d[1]) = (other, 2, k[1], d[1]);
-                    row.reg += weighted(k[1], w_o, k[1]);
-                }
-                row.reg *= REGULARISATION;
-                row.rhs = target - dot3(k[0], s.base[c.body]);
-                if c.other.is_some() {
-                    row.rhs -= dot3(k[1], s.base[other]);
-                }
-                row
+            let w = s.inv[c.body];
+            let mu = c.mu;
+            let (dn, dt) = (c.row(c.n).0, c.row(c.t()).0);
+            let row = |k: [f64; 3], d: [f64; 3], target: f64| Row {
+                rhs: target - dot3(k, s.base[c.body]),
+                reg: REGULARISATION * weighted(k, w, k),
+                ..one(c.body, k, d)
             };
-            let rows = match *mode {
-                Mode::Off => Vec::new(),
-                Mode::Stick => vec![
-                    row([kn, kn_o], [kn, kn_o], c.target),
-                    row([kt, kt_o], [kt, kt_o], 0.0),
-                ],
+            *first = (*mode != Mode::Off).then_some(self.extra.len());
+            match *mode {
+                Mode::Off => {}
+                Mode::Stick => self.extra.extend([row(dn, dn, c.target), row(dt, dt, 0.0)]),
                 Mode::Slide(sign) => {
-                    let slid =
-                        |n: [f64; 3], t: [f64; 3]| [0, 1, 2].map(|a| n[a] + sign * mu * t[a]);
-                    vec![row([kn, kn_o], [slid(kn, kt), slid(kn_o, kt_o)], c.target)]
+                    let d = [0, 1, 2].map(|a| dn[a] + sign * mu * dt[a]);
+                    self.extra.push(row(dn, d, c.target));
                 }
-            };
-            let into = if c.other.is_some() {
-                &mut self.border
-            } else {
-                &mut self.extra
-            };
-            *first = (!rows.is_empty()).then_some(if c.other.is_some() {
-                Place::Border(into.len())
-            } else {
-                Place::Band(into.len())
-            });
-            into.extend(rows);
+            }
         }
     }
 
     /// Candidate `i`'s normal and friction impulses in the last solve.
     fn impulse(&self, s: &Scratch, i: usize) -> (f64, f64) {
-        let Some(place) = self.first[i] else {
+        let Some(e) = self.first[i] else {
             return (0.0, 0.0);
         };
-        let (e, x): (usize, &dyn Fn(usize) -> f64) = match place {
-            Place::Band(e) => (e, &|e| s.x[s.extra_at[e]]),
-            Place::Border(e) => (e, &|e| self.y[e]),
-        };
+        let x = |e: usize| s.x[s.extra_at[e]];
         match self.modes[i] {
             Mode::Off => (0.0, 0.0),
             Mode::Stick => (x(e), x(e + 1)),

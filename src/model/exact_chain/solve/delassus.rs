@@ -1,6 +1,6 @@
-//! The impulses of a stage with fewer than `super::active::FROM_CONTACTS` contact points
-//! where the tape has no thickness, or where an active set (`super::active`,
-//! `super::dense`) did not settle: the joints held by a direct solve, the contacts solved against the exact chain's
+//! The impulses of a stage with fewer than `super::active::FROM_CONTACTS` contact points,
+//! with a contact between two bodies, or where the active set (`super::active`) did not
+//! settle: the joints held by a direct solve, the contacts solved against the exact chain's
 //! response by projected Gauss-Seidel on their Delassus matrix (Baraff 1996, section 8: the
 //! contacts as `k` auxiliary constraints at `O(k N)`). A contact between two bodies far apart
 //! along the chain would break the joints' band; as an auxiliary constraint it costs what a

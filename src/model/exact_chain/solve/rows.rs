@@ -262,7 +262,7 @@ fn joint_rows(chain: &ExactChain, s: &mut Scratch, i: usize, stage: Stage) {
 }
 
 /// `k_r M^-1 d_c^T` over the bodies two rows share.
-pub(super) fn coupling(r: &Row, c: &Row, inv: &[[f64; 3]]) -> f64 {
+fn coupling(r: &Row, c: &Row, inv: &[[f64; 3]]) -> f64 {
     let mut sum = 0.0;
     for a in 0..r.count {
         let body = r.body[a];
