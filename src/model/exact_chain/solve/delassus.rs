@@ -96,20 +96,40 @@ pub(super) fn solve(chain: &mut ExactChain, s: &mut Scratch) -> Result<StepRepor
         .collect();
     let mut report = StepReport::default();
     let mut p = Vec::new();
+    let mut layout = Vec::new();
     for _ in 0..s.candidates.len() + 1 {
+        // A frictionless contact has no friction to solve: its normal's direction alone.
+        layout = rows_of(s, &engaged);
         p = engaged
             .iter()
-            .flat_map(|&c| [s.candidates[c].normal.max(0.0), s.candidates[c].tangent])
+            .zip(&layout)
+            .flat_map(|(&c, (_, t))| {
+                let c = &s.candidates[c];
+                std::iter::once(c.normal.max(0.0)).chain(t.map(|_| c.tangent))
+            })
             .collect();
-        let dirs = directions(s, &engaged);
+        let dirs: Vec<Dir> = directions(s, &engaged)
+            .into_iter()
+            .enumerate()
+            .filter(|(i, _)| i % 2 == 0 || layout[i / 2].1.is_some())
+            .map(|(_, d)| d)
+            .collect();
         if !engaged.is_empty() {
             let w = matrix(chain, s, &dirs);
             let u0: Vec<f64> = dirs.iter().map(|d| d.speed(&held_v)).collect();
             // The contacts' velocities to the position tolerance over the step, or to
-            // SPEED_TOLERANCE of the fastest of them, whichever is wider.
-            let scale = u0.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+            // SPEED_TOLERANCE of the fastest of them (slip included), whichever is wider.
+            let slip = engaged.iter().map(|&c| {
+                let c = &s.candidates[c];
+                c.speed(c.t(), &held_v)
+            });
+            let scale = u0
+                .iter()
+                .copied()
+                .chain(slip)
+                .fold(0.0_f64, |m, x| m.max(x.abs()));
             let tol = tol_speed.max(SPEED_TOLERANCE * scale);
-            let (sweeps, converged) = gauss_seidel(s, &engaged, &w, &u0, &mut p, tol);
+            let (sweeps, converged) = gauss_seidel(s, (&engaged, &layout), &w, &u0, &mut p, tol);
             report.iterations += sweeps;
             report.converged = converged;
         } else {
@@ -134,11 +154,26 @@ pub(super) fn solve(chain: &mut ExactChain, s: &mut Scratch) -> Result<StepRepor
     for c in &mut s.candidates {
         (c.normal, c.tangent) = (0.0, 0.0);
     }
-    for (i, &c) in engaged.iter().enumerate() {
+    for (&c, &(n, t)) in engaged.iter().zip(&layout) {
         let c = &mut s.candidates[c];
-        (c.normal, c.tangent) = (p[2 * i], p[2 * i + 1]);
+        (c.normal, c.tangent) = (p[n], t.map_or(0.0, |t| p[t]));
     }
     Ok(report)
+}
+
+/// Where each of the `engaged` candidates' impulses lies among the solve's directions: its
+/// normal's, and its friction's where it has friction (`mu > 0`).
+fn rows_of(s: &Scratch, engaged: &[usize]) -> Vec<(usize, Option<usize>)> {
+    let mut next = 0;
+    engaged
+        .iter()
+        .map(|&c| {
+            let rough = s.candidates[c].mu > 0.0;
+            let at = (next, rough.then_some(next + 1));
+            next += 1 + usize::from(rough);
+            at
+        })
+        .collect()
 }
 
 /// The stage's velocity with the joints held and no contact, from `s.free` into `s.v` (the
@@ -331,7 +366,7 @@ const HELD: f64 = 1e-9;
 /// sweeps taken and whether the last moved no contact's velocity by more than `tol_speed`.
 fn gauss_seidel(
     s: &Scratch,
-    engaged: &[usize],
+    (engaged, layout): (&[usize], &[(usize, Option<usize>)]),
     w: &[f64],
     u0: &[f64],
     p: &mut [f64],
@@ -356,14 +391,15 @@ fn gauss_seidel(
     };
     for sweep in 1..=MAX_SWEEPS {
         let mut moved: f64 = 0.0;
-        for (i, &c) in engaged.iter().enumerate() {
+        for (&c, &(n, t)) in engaged.iter().zip(layout) {
             let (target, mu) = (s.candidates[c].target, s.candidates[c].mu);
-            let (n, t) = (2 * i, 2 * i + 1);
             if w[n * m + n] > 0.0 {
                 let normal = (p[n] - (u[n] - target) / w[n * m + n]).max(0.0);
                 moved = moved.max(update(n, normal, p, &mut u));
             }
-            if w[t * m + t] > 0.0 {
+            if let Some(t) = t
+                && w[t * m + t] > 0.0
+            {
                 let bound = mu * p[n];
                 let tangent = (p[t] - u[t] / w[t * m + t]).clamp(-bound, bound);
                 moved = moved.max(update(t, tangent, p, &mut u));
