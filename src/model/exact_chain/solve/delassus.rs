@@ -14,7 +14,9 @@
 //! still takes below its target joins them and the contacts are solved again. Projected
 //! Gauss-Seidel on the matrix (each normal impulse `>= 0` against its target, its friction
 //! clamped to `mu` times it) converges on a positive semi-definite matrix, redundant contacts
-//! included, with bounded impulses. The velocity is then one last solve with the contacts'
+//! included, with bounded impulses. A frictionless contact is its normal's direction alone:
+//! a friction row clamped to zero changes nothing but the matrix's size, four times larger
+//! where every contact is frictionless. The velocity is then one last solve with the contacts'
 //! impulses applied.
 
 use super::super::{ExactChain, StepError, StepReport};
