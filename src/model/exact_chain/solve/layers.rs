@@ -7,7 +7,10 @@
 //! normal is along the line from the link's closest point to the node, its point halfway
 //! between them: where the two faces meet. Two points of the tape closer along it than
 //! [`Layers::exclusion_m`] never meet, so a tight turn's neighbouring links, which overlap
-//! by geometry, are not a contact; bodies joined to each other meet only beyond it.
+//! by geometry, are not a contact; bodies joined to each other meet only beyond it. How far
+//! apart along the tape a node and its closest point on a link are is read once a step, at
+//! its start, where the step finds its features: a feature counts for a whole step or not
+//! at all.
 //!
 //! A step searches once, at its start, for every node and link within a margin of each
 //! other that covers what the step can move them ([`near`]); every pose of the step then
@@ -124,6 +127,8 @@ struct Search<'a> {
 struct Side<'a> {
     owner: u32,
     nodes: &'a [[f64; 2]],
+    /// Each node's arc length along the tape (m).
+    arcs: &'a [f64],
     margin: f64,
     /// Whether its first node is a point of its own (else the side before it holds it).
     first_node: bool,
@@ -134,6 +139,7 @@ impl Search<'_> {
         Side {
             owner: i as u32,
             nodes: &self.world[self.at[i]..self.at[i + 1]],
+            arcs: &self.layers.outlines[i].arc_m,
             margin: self.margin[i],
             // The first body's first node is its own, unless the pin holds it still.
             first_node: i == 0 && !self.pinned,
@@ -141,7 +147,8 @@ impl Search<'_> {
     }
 
     /// Every node of `a` among `nodes` against every link of `b` among `links` whose faces
-    /// are within the two sides' margins, into `out`.
+    /// are within the two sides' margins, and whose closest points are at least
+    /// [`Layers::exclusion_m`] apart along the tape, into `out`.
     fn nodes_on_links(
         &self,
         (a, nodes): (Side<'_>, std::ops::Range<usize>),
@@ -155,9 +162,12 @@ impl Search<'_> {
             }
             let p = a.nodes[n];
             for k in links.clone() {
-                let (c, _) = closest_on(p, b.nodes[k], b.nodes[k + 1]);
+                let (c, t) = closest_on(p, b.nodes[k], b.nodes[k + 1]);
                 let d = [p[0] - c[0], p[1] - c[1]];
-                if d[0] * d[0] + d[1] * d[1] < within * within {
+                let arc = b.arcs[k] + t * (b.arcs[k + 1] - b.arcs[k]);
+                if d[0] * d[0] + d[1] * d[1] < within * within
+                    && (a.arcs[n] - arc).abs() >= self.layers.exclusion_m
+                {
                     out.push(Key {
                         node: [a.owner, n as u32],
                         link: [b.owner, k as u32],
@@ -263,6 +273,7 @@ fn near_laid(
     let laid_side = Side {
         owner: LAID,
         nodes: &laid.nodes,
+        arcs: &laid.arc_m,
         margin: 0.0,
         first_node: true,
     };
@@ -299,8 +310,13 @@ fn near_laid(
 
 /// The layers' touches of the features `keys` at `pose`, in their order, into `out`. A
 /// node meets a link where the link's closest point to it is not its last node (which the
-/// next link holds), but at the tape's free end, and where the two are at least
-/// [`Layers::exclusion_m`] apart along the tape.
+/// next link holds), but at the tape's free end. Whether the two are at least
+/// [`Layers::exclusion_m`] apart along the tape was decided where `keys` were found, at the
+/// step's start ([`near`]): a touch that a fold brings past the exclusion within a step
+/// would start to count at whatever depth it has there (links shorter than the thickness
+/// always lie within reach of their neighbours), a depth no impulse made and only a move
+/// by position could take out, the fold's energy with it. Found at the next step's start,
+/// it is a contact at its depth, which the impulses keep from growing.
 pub(super) fn evaluate(chain: &ExactChain, pose: &Pose, keys: &[Key], out: &mut Vec<Touch>) {
     out.clear();
     let Some(layers) = chain.layers.as_ref() else {
@@ -331,10 +347,6 @@ pub(super) fn evaluate(chain: &ExactChain, pose: &Pose, keys: &[Key], out: &mut 
         let link_arcs = arcs(b);
         let free_end = b == last_body && k as usize + 2 == link_arcs.len();
         if t >= 1.0 && !free_end {
-            continue;
-        }
-        let arc = link_arcs[k as usize] + t * (link_arcs[k as usize + 1] - link_arcs[k as usize]);
-        if (arcs(a)[n as usize] - arc).abs() < layers.exclusion_m {
             continue;
         }
         let d = [p[0] - c[0], p[1] - c[1]];
