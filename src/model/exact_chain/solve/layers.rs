@@ -164,9 +164,9 @@ impl Search<'_> {
             for k in links.clone() {
                 let (c, t) = closest_on(p, b.nodes[k], b.nodes[k + 1]);
                 let d = [p[0] - c[0], p[1] - c[1]];
-                let arc = b.arcs[k] + t * (b.arcs[k + 1] - b.arcs[k]);
+                let arc = || b.arcs[k] + t * (b.arcs[k + 1] - b.arcs[k]);
                 if d[0] * d[0] + d[1] * d[1] < within * within
-                    && (a.arcs[n] - arc).abs() >= self.layers.exclusion_m
+                    && (a.arcs[n] - arc()).abs() >= self.layers.exclusion_m
                 {
                     out.push(Key {
                         node: [a.owner, n as u32],

@@ -40,8 +40,9 @@ fn layers(friction: f64, outlines: Vec<Outline>, laid: Outline) -> Layers {
 }
 
 /// Two rods of mass `m` and length `l` hinged at the origin, along +x and open by
-/// `2 theta` about it, closing at `omega` each: the first's tip is its first node (arc 0),
-/// the hinge is at arc `l` on both, the second's tip at `2 l`.
+/// `2 theta` about it, closing at `omega` each, as the tape's layers (friction 0.5, no laid
+/// tape): the first's tip is its first node (arc 0), the hinge is at arc `l` on both, the
+/// second's tip at `2 l`.
 fn hinged_pair(m: f64, l: f64, theta: f64, omega: f64) -> ExactChain {
     let (c, s) = (theta.cos(), theta.sin());
     let upper = Body {
@@ -68,7 +69,13 @@ fn hinged_pair(m: f64, l: f64, theta: f64, omega: f64) -> ExactChain {
         prev: [0.5 * l, 0.0],
         next: [-0.5 * l, 0.0],
     };
-    ExactChain::new(vec![upper, lower], vec![hinge], None, TOLERANCE)
+    let mut chain = ExactChain::new(vec![upper, lower], vec![hinge], None, TOLERANCE);
+    chain.set_layers(layers(
+        0.5,
+        vec![outline(l, 0.0), outline(l, l)],
+        Outline::default(),
+    ));
+    chain
 }
 
 /// The kinetic energy of `chain`'s bodies (J).
@@ -160,11 +167,6 @@ fn two_pieces_closing_like_scissors_meet_at_their_tips_and_stop_as_one_rigid_v()
     for omega in [10.0, 100.0] {
         let h = 1e-3 / omega;
         let mut chain = hinged_pair(m, l, theta, omega);
-        chain.set_layers(layers(
-            0.5,
-            vec![outline(l, 0.0), outline(l, l)],
-            Outline::default(),
-        ));
         let before = momentum(&chain);
         let k0 = kinetic(&chain);
         let report = chain.step(h, [0.0, 0.0]).expect("solves");
@@ -217,11 +219,6 @@ fn a_fold_that_brings_a_touch_past_the_exclusion_already_overlapping_stops_as_a_
     let theta = 0.5 * opening + 0.002;
     let h = 0.004 / omega;
     let mut chain = hinged_pair(m, l, theta, omega);
-    chain.set_layers(layers(
-        0.5,
-        vec![outline(l, 0.0), outline(l, l)],
-        Outline::default(),
-    ));
     let k0 = kinetic(&chain);
     let before = momentum(&chain);
     let want = (before[0] * before[0] + before[1] * before[1]) / (4.0 * m);
