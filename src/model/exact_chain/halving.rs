@@ -1,4 +1,5 @@
-//! A step taken in halves: where its drift does not hold, where its solve fails, or,
+//! A step taken in halves: where its drift does not hold, where its solve fails, where a
+//! move by position carries a body beyond what its search for the layers covered, or,
 //! bounded ([`ExactChain::step_bounded`]), where its joints' error is outside its bound;
 //! down to 1/1024 of it, the halves' reports summed.
 
@@ -31,9 +32,14 @@ impl ExactChain {
         // A contact solve that missed its tolerance is counted, not halved: a shorter step
         // does not make a stiff contact set converge. But a step that leaves a joint open
         // wider than the contacts' slop (the projection out of the floor could not hold
-        // them: a step that took many points deep at once) is taken again in halves.
+        // them: a step that took many points deep at once) is taken again in halves, as is
+        // one whose move by position carried a body beyond the margin its layers' features
+        // were found within ([`StepReport::beyond_reach_m`]): touches it never measured may
+        // lie a thickness deep at its end.
         let open = solve::SLOP * self.tolerance.position_m;
-        let fits = |r: &StepReport| self.drift_holds(r) && r.joint_gap_m <= open;
+        let fits = |r: &StepReport| {
+            self.drift_holds(r) && r.joint_gap_m <= open && r.beyond_reach_m == 0.0
+        };
         let accurate = |r: &StepReport| bound.is_none_or(|b| b.holds(r));
         match result {
             Ok(report) if accurate(&report) && (fits(&report) || depth >= MAX_DEPTH) => {
@@ -95,6 +101,7 @@ impl ExactChain {
             caught_j: first.caught_j + second.caught_j,
             moved_j: first.moved_j + second.moved_j,
             projection_j: first.projection_j + second.projection_j,
+            beyond_reach_m: first.beyond_reach_m.max(second.beyond_reach_m),
         })
     }
 }

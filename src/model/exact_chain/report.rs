@@ -82,6 +82,12 @@ pub struct StepReport {
     /// it and the drift's stage cancel to the step's error (docs/final-bang.md, "A
     /// tolerance on the bang's steps").
     pub projection_j: f64,
+    /// How far a body's outline ended beyond the margin the step found the layers'
+    /// features within (m; 0: within it, and without [`super::Layers`]). The search covers
+    /// what the drift can move a body; a move by position out of the floor or out of
+    /// another layer may take it further, to touches the step never measured. A step
+    /// that does is taken again in halves.
+    pub beyond_reach_m: f64,
 }
 
 impl StepReport {

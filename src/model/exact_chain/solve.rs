@@ -165,6 +165,7 @@ fn stages(
     }
     report.penetration_m = modes::penetration(chain, s);
     report.overlap_m = modes::overlap(chain, s);
+    report.beyond_reach_m = modes::beyond_reach(chain, s);
     for (b, v) in chain.bodies.iter_mut().zip(&s.v) {
         b.velocity_m_s = [v[0], v[1]];
         b.spin_rad_s = v[2];

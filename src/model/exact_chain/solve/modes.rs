@@ -408,6 +408,28 @@ pub(super) fn overlap(chain: &ExactChain, s: &mut Scratch) -> f64 {
     deepest
 }
 
+/// How far any body's outline node ended beyond the margin the step's layers' features were
+/// found within, from where the step began (m; 0 if none, and without layers): two
+/// layers each within their margins of where they were are within the search's reach of
+/// each other.
+pub(super) fn beyond_reach(chain: &ExactChain, s: &Scratch) -> f64 {
+    let Some(layers) = chain.layers.as_ref() else {
+        return 0.0;
+    };
+    let bodies = chain.bodies.iter().zip(&s.saved);
+    let outlines = layers.outlines.iter().zip(&s.near_margin);
+    bodies
+        .zip(outlines)
+        .map(|((now, was), (outline, margin))| {
+            let moved = outline.nodes.iter().map(|&n| {
+                let (a, b) = (now.point(n), was.point(n));
+                (a[0] - b[0]).hypot(a[1] - b[1])
+            });
+            (moved.fold(0.0, f64::max) - margin).max(0.0)
+        })
+        .fold(0.0, f64::max)
+}
+
 /// What `c` pushed on, as the step reports it.
 pub(super) fn surface(c: &Candidate) -> Surface {
     match (c.source, c.other) {
