@@ -98,13 +98,16 @@ pub fn scene_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-/// Loads and runs one scene file, writing its outputs into `out_root/<file stem>`, and
-/// verifies them.
+/// Loads and runs one scene file, writing its outputs into `out_root/<name>`, and verifies
+/// them. Its name is the file's without `.toml`; a shipped name (`hard/friction-0.05`) is
+/// kept whole, dots and all.
 pub fn check_scene(path: &Path, out_root: &Path) -> Case {
-    let name = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = match path.extension() {
+        Some(x) if x == "toml" => path.file_stem(),
+        _ => path.file_name(),
+    }
+    .map(|s| s.to_string_lossy().into_owned())
+    .unwrap_or_default();
     let scene = match Scene::from_file(path) {
         Ok(s) => s,
         Err(e) => {
@@ -464,6 +467,21 @@ mod tests {
     /// A coil's columns.
     fn coil() -> Vec<String> {
         CSV_COLUMNS.iter().map(|c| (*c).to_owned()).collect()
+    }
+
+    #[test]
+    fn a_case_is_named_by_its_file_without_toml_and_a_shipped_name_whole() {
+        let out = tempfile::tempdir().unwrap();
+        let missing = out.path().join("missing");
+        for (path, name) in [
+            (missing.join("friction-0.05.toml"), "friction-0.05"),
+            (missing.join("friction-0.05"), "friction-0.05"),
+            (missing.join("thin-300.toml"), "thin-300"),
+        ] {
+            let case = check_scene(&path, out.path());
+            assert_eq!(case.name, name, "{}", path.display());
+            assert!(matches!(case.outcome, Outcome::Rejected(_)), "{case:?}");
+        }
     }
 
     #[test]
