@@ -102,8 +102,8 @@ enum Command {
         /// A run's output folder, e.g. runs/yoga-mat.
         dir: PathBuf,
     },
-    /// Run the hard cases, verify the outputs, print a table (about 4.7 minutes on a 2-core
-    /// machine, more than half of it the frictionless floor's bang; `hard/NAME` runs one); or, given a run's output folder (one with a
+    /// Run the hard cases, verify the outputs, print a table (about 23 minutes on a 2-core
+    /// machine, most of it thin-1000's bang; `hard/NAME` runs one); or, given a run's output folder (one with a
     /// report.json), verify that its files are sound and belong to one run; or, given a
     /// killed run's folder, say what it left. Exit 0 when every case ends with a stated
     /// reason and sound outputs, else 1.
