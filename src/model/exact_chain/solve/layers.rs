@@ -12,6 +12,9 @@
 //! its start, where the step finds its features: a feature counts for a whole step or not
 //! at all.
 //!
+//! The laid tape's last node, where the first body is pinned, is met as a node of the laid
+//! tape: a body folded back across the pin touches it there.
+//!
 //! A step searches once, at its start, for every node and link within a margin of each
 //! other that covers what the step can move them ([`near`]); every pose of the step then
 //! measures those features alone ([`evaluate`]), each in constant time. The search's pairs
@@ -285,6 +288,15 @@ fn near_laid(
         let to = index.left.partition_point(|&x| x <= b[2]);
         let body = search.side(i);
         let n = body.nodes.len();
+        // The laid tape's last node, where the first body is pinned, is no laid link's first
+        // node, and the pinned body's first node is not its own: a point neither side holds
+        // as a node. A body folded back across the pin meets it there.
+        let last = laid.nodes[laid.nodes.len() - 1];
+        if search.pinned && b[0] <= last[0] && last[0] <= b[2] && b[1] <= last[1] && last[1] <= b[3]
+        {
+            let at = laid.nodes.len() - 1;
+            search.nodes_on_links((laid_side, at..at + 1), (body, 0..n.saturating_sub(1)), out);
+        }
         for &k in &index.order[from..to] {
             if out.len() > budget {
                 return;

@@ -3,7 +3,8 @@
 //! pieces closing like scissors meet at their tips, keep their momentum and angular
 //! momentum, and lose what a rigid V cannot keep, and do so where a fold brings their
 //! touch past the exclusion already overlapping; a spinning piece landing flat slips at
-//! its face, not at its midline.
+//! its face, not at its midline; a piece folded back across the pin meets the laid tape's
+//! last node.
 
 use super::*;
 
@@ -360,5 +361,73 @@ fn a_pinned_piece_resting_on_the_laid_tape_near_its_pin_takes_the_least_impulse_
     assert!(
         work < kick,
         "a contact's work {work:e} J in a step, above {kick:e} J"
+    );
+}
+
+#[test]
+fn a_piece_folded_back_across_the_pin_meets_the_laid_tape_s_last_node() {
+    // The laid tape ends where the first piece is pinned, P. That point is no laid link's
+    // first node, and the pinned piece's first node is the pin's: neither side held it as a
+    // node, so a piece folded back across the pin passed through it. Here the first piece
+    // stands on P; the second, hinged at its top, swings down past P, its line 2R + 2 mm
+    // from it, at 1 rad/s (no gravity). Nothing else is within reach of it. Unmet, it would
+    // swing to 6 mm of P (0.8 R deep) within the 600 steps; met, it stops at the touch.
+    let (m, l0, h) = (0.05, 0.1, 1e-4);
+    let phi = ((2.0 * R + 0.002) / l0).asin();
+    let l1 = 2.0 * l0 * phi.cos();
+    let dir = [phi.sin(), -phi.cos()];
+    let top = [0.0, l0];
+    let omega = -1.0;
+    let arm = [0.5 * l1 * dir[0], 0.5 * l1 * dir[1]];
+    let first = Body {
+        angle_rad: std::f64::consts::FRAC_PI_2,
+        ..rod(m, l0, [0.0, 0.5 * l0], [0.0, 0.0], 0.0)
+    };
+    let second = Body {
+        angle_rad: dir[1].atan2(dir[0]),
+        ..rod(
+            m,
+            l1,
+            [top[0] + arm[0], top[1] + arm[1]],
+            [-omega * arm[1], omega * arm[0]],
+            omega,
+        )
+    };
+    let hinge = Joint {
+        prev: [0.5 * l0, 0.0],
+        next: [-0.5 * l1, 0.0],
+    };
+    let pin = Pin {
+        anchor: [-0.5 * l0, 0.0],
+        at_m: [0.0, 0.0],
+    };
+    let mut chain = ExactChain::new(vec![first, second], vec![hinge], Some(pin), TOLERANCE);
+    let laid = Outline {
+        nodes: vec![[-0.2, 0.0], [-0.1, 0.0], [0.0, 0.0]],
+        arc_m: vec![0.0, 0.1, 0.2],
+    };
+    chain.set_layers(layers(
+        0.5,
+        vec![outline(l0, 0.2), outline(l1, 0.2 + l0)],
+        laid,
+    ));
+    // How far P lies from the second piece's midline (m).
+    let distance = |chain: &ExactChain| {
+        let b = &chain.bodies()[1];
+        let (a, c) = (b.point([-0.5 * l1, 0.0]), b.point([0.5 * l1, 0.0]));
+        let e = [c[0] - a[0], c[1] - a[1]];
+        let t = (-(a[0] * e[0] + a[1] * e[1]) / (e[0] * e[0] + e[1] * e[1])).clamp(0.0, 1.0);
+        (a[0] + t * e[0]).hypot(a[1] + t * e[1])
+    };
+    let mut closest = f64::INFINITY;
+    for _ in 0..600 {
+        chain.step(h, [0.0, 0.0]).expect("solves");
+        closest = closest.min(distance(&chain));
+    }
+    println!("closest approach {closest:.6e} m, 2R = {:.1e} m", 2.0 * R);
+    assert!(
+        closest > 2.0 * R - 1e-6,
+        "the second piece came {closest:e} m from the pin, 2R = {:e} m",
+        2.0 * R
     );
 }
