@@ -280,6 +280,10 @@ fn near_laid(
         margin: 0.0,
         first_node: true,
     };
+    let last = laid.nodes.len() - 1;
+    // The laid tape's last node as a box of its own, for the pin's point (below).
+    let [x, y] = laid.nodes[last];
+    let pin_box: Aabb = [x, y, x, y];
     for (i, aabb) in boxes.iter().enumerate() {
         // The body's box already holds its own radius and margin: grow it by the laid
         // tape's radius.
@@ -291,11 +295,12 @@ fn near_laid(
         // The laid tape's last node, where the first body is pinned, is no laid link's first
         // node, and the pinned body's first node is not its own: a point neither side holds
         // as a node. A body folded back across the pin meets it there.
-        let last = laid.nodes[laid.nodes.len() - 1];
-        if search.pinned && b[0] <= last[0] && last[0] <= b[2] && b[1] <= last[1] && last[1] <= b[3]
-        {
-            let at = laid.nodes.len() - 1;
-            search.nodes_on_links((laid_side, at..at + 1), (body, 0..n.saturating_sub(1)), out);
+        if search.pinned && overlaps(&b, &pin_box) {
+            search.nodes_on_links(
+                (laid_side, last..last + 1),
+                (body, 0..n.saturating_sub(1)),
+                out,
+            );
         }
         for &k in &index.order[from..to] {
             if out.len() > budget {
