@@ -440,7 +440,11 @@ impl Model {
                 self.release_coil();
             }
         }
-        self.freeze_settled();
+        if self.phase == Phase::Rolling && self.settings.friction == 0.0 {
+            self.join_laid();
+        } else {
+            self.freeze_settled();
+        }
         if self.phase == Phase::Bang && self.t - self.bang.started_s >= self.settings.bang_cap_s {
             self.end_bang(BangEnd::Cap);
         }
