@@ -163,11 +163,9 @@ impl Model {
         self.coil.body = None;
         self.coil.ball = None;
         self.coil.first_attached = self.chain.len();
-        // The laid tape held flat on a frictionless floor (`join_laid`) may rise and turn
-        // in the bang.
-        if let Some(first) = self.chain.free.front().copied() {
-            self.world.bodies[first.body].set_locked_axes(LockedAxes::empty(), true);
-        }
+        // The laid tape that slid as one body on a frictionless floor (`join_laid`) bends in
+        // the bang: its links move on their own again.
+        self.part_laid();
         // The engine leaves the joints a few microns apart under tension; closing those gaps
         // later, under the bang's far larger tension, would do work on the tape. Close them
         // now, by position alone, then join the links into the bang's pieces. Joining pins
