@@ -385,6 +385,17 @@ fn frictionless_coil_follows_the_sliding_spiral_and_keeps_its_centre_of_mass() {
     assert!(!json.contains("null"), "null in report.json: {json}");
 }
 
+/// The thin tape's coil with b = 1 mm (1160 links) on a frictionless floor, its bang cut
+/// at `bang_cap_s`.
+fn frictionless_thin_tape(bang_cap_s: f64) -> Scene {
+    let text = format!(
+        "[tape]\nouter_radius_m = 0.03\nthickness_m = 0.001\nmass_kg = 0.2\n\
+         [discretisation]\nlinks_per_turn = 40\n[floor]\nfriction = 0.0\n\
+         [push]\ncontact_speed_m_s = 0.1\n[stop]\nbang_cap_s = {bang_cap_s}\n"
+    );
+    Scene::from_toml_str(&text, "frictionless-thin").unwrap()
+}
+
 #[test]
 fn a_frictionless_floor_s_laid_tape_slides_as_one_body_and_gains_no_energy() {
     // Nothing holds a laid tape on a frictionless floor: it slides, flat, as one body. Left
@@ -392,13 +403,7 @@ fn a_frictionless_floor_s_laid_tape_slides_as_one_body_and_gains_no_energy() {
     // along it: this tape of 1160 links gained 0.45 % of its energy by its release, up to
     // 4.5e-3 of the energy scale, with 1084 bodies moving. Joined into one body held flat it
     // rose at most 1.1e-4 of it, with at most 39 bodies moving (measured).
-    let s = Scene::from_toml_str(
-        "[tape]\nouter_radius_m = 0.03\nthickness_m = 0.001\nmass_kg = 0.2\n\
-         [discretisation]\nlinks_per_turn = 40\n[floor]\nfriction = 0.0\n\
-         [push]\ncontact_speed_m_s = 0.1\n[stop]\nbang_cap_s = 0.0\n",
-        "frictionless-thin",
-    )
-    .unwrap();
+    let s = frictionless_thin_tape(0.0);
     let (samples, report) = run_kept(&s);
     assert_eq!(report.stop.status(), Status::Completed, "{}", report.stop);
     assert!(
@@ -420,13 +425,7 @@ fn a_frictionless_laid_tape_that_slid_as_one_body_bends_in_the_bang() {
     // The laid tape slides as one body while the coil unrolls, and is parted into its links
     // at the release: the bang joins them into its pieces, as it does the rest. Kept as one
     // body, metres long and lifted at its inner end, it rose off the floor whole.
-    let s = Scene::from_toml_str(
-        "[tape]\nouter_radius_m = 0.03\nthickness_m = 0.001\nmass_kg = 0.2\n\
-         [discretisation]\nlinks_per_turn = 40\n[floor]\nfriction = 0.0\n\
-         [push]\ncontact_speed_m_s = 0.1\n[stop]\nbang_cap_s = 0.0002\n",
-        "frictionless-thin",
-    )
-    .unwrap();
+    let s = frictionless_thin_tape(0.0002);
     let (samples, report) = run_kept(&s);
     assert_eq!(report.stop.status(), Status::Completed, "{}", report.stop);
     let rolling = samples.iter().filter(|s| s.omega_rad_s > 0.0);
